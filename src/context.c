@@ -1,0 +1,342 @@
+/*
+ * The context (memory, errors, the pair sink) and nbs_detect, which validates the input,
+ * picks an algorithm from the table and runs it.
+ */
+#include "internal.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+
+const char *nbs_version(void) { return NBS_VERSION_STRING; }
+
+const char *nbs_status_name(nbs_status status) {
+  switch (status) {
+#define NBS_X_NAME(e, v, name, msg)                                                           \
+  case e:                                                                                     \
+    return name;
+    NBS_STATUS_LIST(NBS_X_NAME)
+#undef NBS_X_NAME
+  }
+  return "unknown";
+}
+
+const char *nbs_status_message(nbs_status status) {
+  switch (status) {
+#define NBS_X_MSG(e, v, name, msg)                                                            \
+  case e:                                                                                     \
+    return msg;
+    NBS_STATUS_LIST(NBS_X_MSG)
+#undef NBS_X_MSG
+  }
+  return "unknown status";
+}
+
+/* ---- algorithms ---------------------------------------------------------------------- */
+
+typedef struct nbs__algorithm_entry {
+  const char *name;
+  nbs_status (*run)(nbs__run *run); /* NULL for auto, which picks one of the others */
+} nbs__algorithm_entry;
+
+static const nbs__algorithm_entry nbs__algorithms[NBS_ALGORITHM_COUNT] = {
+    [NBS_AUTO] = {"auto", NULL},
+    [NBS_DIRECT] = {"direct", nbs__direct},
+    [NBS_SCREENING] = {"screening", nbs__screening},
+    [NBS_SORTING] = {"sorting", nbs__sorting},
+    [NBS_NBS] = {"nbs", nbs__nbs},
+};
+
+const char *nbs_algorithm_name(nbs_algorithm algorithm) {
+  if ((int)algorithm < 0 || algorithm >= NBS_ALGORITHM_COUNT) return NULL;
+  return nbs__algorithms[algorithm].name;
+}
+
+nbs_status nbs_algorithm_from_name(const char *name, nbs_algorithm *out) {
+  if (!name || !out) return NBS_ERR_NULL;
+  for (int a = 0; a < NBS_ALGORITHM_COUNT; a++) {
+    if (strcmp(name, nbs__algorithms[a].name) == 0) {
+      *out = (nbs_algorithm)a;
+      return NBS_OK;
+    }
+  }
+  return NBS_ERR_ALGORITHM;
+}
+
+/* Below this many elements, checking every pair is cheaper than building any list. */
+#define NBS__AUTO_DIRECT_MAX 32
+
+/* auto: NBS wherever its head arrays are small next to N (the book's algorithm, O(N) time
+ * and memory); otherwise sorting, whose memory is 3N/4N integers whatever the spread and
+ * which compresses axes too wide to index, so that every finite input succeeds. */
+static nbs_algorithm nbs__choose(const nbs__run *run) {
+  if (run->n <= NBS__AUTO_DIRECT_MAX) return NBS_DIRECT;
+  const nbs__grid *g = &run->grid;
+  if (!g->fits) return NBS_SORTING;
+  int64_t heads = g->n[0] * 2 + g->n[1] * (run->dim == 3 ? 2 : 1) + (run->dim == 3 ? g->n[2] : 0);
+  int64_t limit = 4 * (int64_t)run->n + 4096;
+  if (heads > limit) return NBS_SORTING;
+  if ((uint64_t)(heads + 8) * sizeof(int32_t) > run->ctx->cell_budget) return NBS_SORTING;
+  return NBS_NBS;
+}
+
+/* ---- memory -------------------------------------------------------------------------- */
+
+static void *nbs__default_alloc(void *opaque, size_t size) {
+  (void)opaque;
+  return malloc(size);
+}
+
+static void nbs__default_free(void *opaque, void *p, size_t size) {
+  (void)opaque;
+  (void)size;
+  free(p);
+}
+
+void *nbs__alloc(nbs_context *ctx, size_t size) {
+  if (size == 0) size = 1;
+  void *p = ctx->allocator.alloc(ctx->allocator.opaque, size);
+  if (!p) return NULL;
+  ctx->bytes += size;
+  if (ctx->bytes > ctx->peak_bytes) ctx->peak_bytes = ctx->bytes;
+  return p;
+}
+
+void nbs__free(nbs_context *ctx, void *p, size_t size) {
+  if (!p) return;
+  if (size == 0) size = 1;
+  ctx->allocator.free(ctx->allocator.opaque, p, size);
+  ctx->bytes -= size;
+}
+
+nbs_status nbs__work_reserve(nbs_context *ctx, size_t bytes) {
+  if (bytes <= ctx->work_size) return NBS_OK;
+  void *p = nbs__alloc(ctx, bytes);
+  if (!p) {
+    return nbs__fail(ctx, NBS_ERR_NOMEM, -1, "cannot allocate %zu bytes of work arrays", bytes);
+  }
+  nbs__free(ctx, ctx->work, ctx->work_size);
+  ctx->work = p;
+  ctx->work_size = bytes;
+  ctx->work_kind = NBS__WORK_NONE;
+  return NBS_OK;
+}
+
+/* Grows the pair buffer to hold at least `need` pairs, by half again its size at least. */
+static nbs_status nbs__pairs_grow(nbs_context *ctx, size_t need) {
+  if (need <= ctx->pairs_cap) return NBS_OK;
+  size_t cap = ctx->pairs_cap + ctx->pairs_cap / 2;
+  if (cap < need) cap = need;
+  if (cap < 1024) cap = 1024;
+  if (ctx->max_pairs && cap > ctx->max_pairs) cap = ctx->max_pairs;
+  if (cap > SIZE_MAX / sizeof(nbs_pair)) {
+    return nbs__fail(ctx, NBS_ERR_PAIRS, -1, "a buffer of %zu pairs cannot be addressed", need);
+  }
+  nbs_pair *p = nbs__alloc(ctx, cap * sizeof(nbs_pair));
+  if (!p) {
+    return nbs__fail(ctx, NBS_ERR_NOMEM, -1, "cannot grow the pair buffer to %zu pairs (%zu bytes)",
+                     cap, cap * sizeof(nbs_pair));
+  }
+  if (ctx->pairs_count) memcpy(p, ctx->pairs, ctx->pairs_count * sizeof(nbs_pair));
+  nbs__free(ctx, ctx->pairs, ctx->pairs_cap * sizeof(nbs_pair));
+  ctx->pairs = p;
+  ctx->pairs_cap = cap;
+  return NBS_OK;
+}
+
+/* ---- errors -------------------------------------------------------------------------- */
+
+nbs_status nbs__fail(nbs_context *ctx, nbs_status status, int64_t element, const char *fmt, ...) {
+  if (!ctx) return status;
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(ctx->error, sizeof ctx->error, fmt, ap);
+  va_end(ap);
+  ctx->error_element = element;
+  return status;
+}
+
+const char *nbs_context_error(const nbs_context *ctx) { return ctx ? ctx->error : ""; }
+
+int64_t nbs_context_error_element(const nbs_context *ctx) { return ctx ? ctx->error_element : -1; }
+
+/* ---- context ------------------------------------------------------------------------- */
+
+nbs_context_def nbs_default_context_def(void) {
+  nbs_context_def def;
+  memset(&def, 0, sizeof def);
+  def.cell_budget = NBS_DEFAULT_CELL_BUDGET;
+  return def;
+}
+
+nbs_status nbs_context_create(const nbs_context_def *def, nbs_context **out) {
+  if (!out) return NBS_ERR_NULL;
+  *out = NULL;
+  nbs_context_def d = def ? *def : nbs_default_context_def();
+  if ((d.allocator.alloc == NULL) != (d.allocator.free == NULL)) return NBS_ERR_ARGUMENT;
+  if (!d.allocator.alloc) {
+    d.allocator.alloc = nbs__default_alloc;
+    d.allocator.free = nbs__default_free;
+    d.allocator.opaque = NULL;
+  }
+  nbs_context *ctx = d.allocator.alloc(d.allocator.opaque, sizeof *ctx);
+  if (!ctx) return NBS_ERR_NOMEM;
+  memset(ctx, 0, sizeof *ctx);
+  ctx->allocator = d.allocator;
+  ctx->cell_budget = d.cell_budget;
+  ctx->max_pairs = d.max_pairs;
+  ctx->bytes = ctx->peak_bytes = sizeof *ctx;
+  ctx->error_element = -1;
+  *out = ctx;
+  return NBS_OK;
+}
+
+void nbs_context_destroy(nbs_context *ctx) {
+  if (!ctx) return;
+  nbs__free(ctx, ctx->work, ctx->work_size);
+  nbs__free(ctx, ctx->pairs, ctx->pairs_cap * sizeof(nbs_pair));
+  nbs_allocator a = ctx->allocator;
+  a.free(a.opaque, ctx, sizeof *ctx);
+}
+
+size_t nbs_context_bytes(const nbs_context *ctx) { return ctx ? ctx->bytes : 0; }
+
+size_t nbs_context_peak_bytes(const nbs_context *ctx) { return ctx ? ctx->peak_bytes : 0; }
+
+nbs_status nbs_context_reserve(nbs_context *ctx, int64_t n, size_t pairs) {
+  if (!ctx) return NBS_ERR_NULL;
+  ctx->error[0] = '\0';
+  ctx->error_element = -1;
+  if (n < 0 || n > INT32_MAX) {
+    return nbs__fail(ctx, NBS_ERR_COUNT, -1, "cannot reserve for %lld elements",
+                     (long long)n);
+  }
+  /* The largest per-element layout of the algorithms: 4 int32 per element (sorting in 3D),
+   * 3 per element plus the per-axis heads (NBS in 3D). */
+  NBS__TRY(nbs__work_reserve(ctx, (size_t)n * 4 * sizeof(int32_t)));
+  return nbs__pairs_grow(ctx, pairs);
+}
+
+/* ---- the pair sink ------------------------------------------------------------------- */
+
+nbs_status nbs__flush(nbs__run *run) {
+  nbs_context *ctx = run->ctx;
+  if (run->callback) {
+    if (run->callback(run->user, run->buf, run->count) != 0) {
+      run->count = 0;
+      return nbs__fail(ctx, NBS_ERR_STOPPED, -1, "the pair callback asked to stop");
+    }
+    run->count = 0;
+    return NBS_OK;
+  }
+  if (ctx->max_pairs && run->count >= ctx->max_pairs) {
+    return nbs__fail(ctx, NBS_ERR_PAIRS, -1,
+                     "more than %zu pairs (the context's max_pairs); use a callback or raise it",
+                     ctx->max_pairs);
+  }
+  ctx->pairs_count = run->count;
+  NBS__TRY(nbs__pairs_grow(ctx, run->count + 1));
+  run->buf = ctx->pairs;
+  run->cap = ctx->pairs_cap;
+  return NBS_OK;
+}
+
+/* ---- detection ----------------------------------------------------------------------- */
+
+nbs_detect_def nbs_default_detect_def(void) {
+  nbs_detect_def def;
+  memset(&def, 0, sizeof def);
+  def.algorithm = NBS_AUTO;
+  def.mode = NBS_MODE_CONTACTS;
+  return def;
+}
+
+/* In callback mode pairs are batched in the context's pair buffer, this many at a time. */
+#define NBS__BATCH 4096
+
+nbs_status nbs_detect(nbs_context *ctx, const nbs_input *in, const nbs_detect_def *def) {
+  if (!ctx) return NBS_ERR_NULL;
+  ctx->error[0] = '\0';
+  ctx->error_element = -1;
+  ctx->pairs_count = 0;
+  ctx->pairs_valid = false;
+  if (!in) return nbs__fail(ctx, NBS_ERR_NULL, -1, "the input is NULL");
+  nbs_detect_def d = def ? *def : nbs_default_detect_def();
+  if ((int)d.algorithm < 0 || d.algorithm >= NBS_ALGORITHM_COUNT) {
+    return nbs__fail(ctx, NBS_ERR_ALGORITHM, -1, "unknown algorithm %d", (int)d.algorithm);
+  }
+  if (d.mode != NBS_MODE_CONTACTS && d.mode != NBS_MODE_CANDIDATES) {
+    return nbs__fail(ctx, NBS_ERR_MODE, -1, "unknown mode %d", (int)d.mode);
+  }
+
+  nbs__run run;
+  memset(&run, 0, sizeof run);
+  run.ctx = ctx;
+  run.mode = d.mode;
+  run.callback = d.callback;
+  run.user = d.user;
+  NBS__TRY(nbs__prepare(&run, in));
+
+  nbs_algorithm algo = d.algorithm == NBS_AUTO ? nbs__choose(&run) : d.algorithm;
+  run.ran = algo;
+
+  /* The sink: the pair buffer itself, or a batch of it in callback mode. */
+  size_t first = run.callback ? NBS__BATCH : 1024;
+  if (ctx->pairs_cap < first) {
+    ctx->pairs_count = 0;
+    NBS__TRY(nbs__pairs_grow(ctx, first));
+  }
+  run.buf = ctx->pairs;
+  run.cap = run.callback ? NBS__BATCH : ctx->pairs_cap;
+  if (ctx->max_pairs && !run.callback && run.cap > ctx->max_pairs) run.cap = ctx->max_pairs;
+
+  nbs_status s = NBS_OK;
+  if (run.n >= 2) s = nbs__algorithms[algo].run(&run);
+  if (s == NBS_OK && run.callback && run.count > 0) {
+    s = nbs__flush(&run);
+  }
+
+  nbs_stats *st = &ctx->stats;
+  memset(st, 0, sizeof *st);
+  st->algorithm = run.ran;
+  st->mode = run.mode;
+  st->dim = run.dim;
+  st->n = run.n;
+  st->pairs = run.emitted;
+  st->candidates = run.candidates;
+  st->cell_size = algo == NBS_DIRECT ? 0.0 : run.grid.edge;
+  for (int a = 0; a < 3; a++) st->cells[a] = run.cells[a];
+  st->compressed = run.compressed;
+  st->work_bytes = run.work_bytes;
+  st->pair_bytes = ctx->pairs_cap * sizeof(nbs_pair);
+  if (s != NBS_OK) return s;
+
+  ctx->pairs_count = run.callback ? 0 : run.count;
+  ctx->pairs_valid = true;
+  return NBS_OK;
+}
+
+const nbs_pair *nbs_pairs(const nbs_context *ctx, size_t *count) {
+  if (!ctx || !ctx->pairs_valid || ctx->pairs_count == 0) {
+    if (count) *count = 0;
+    return NULL;
+  }
+  if (count) *count = ctx->pairs_count;
+  return ctx->pairs;
+}
+
+nbs_status nbs_last_stats(const nbs_context *ctx, nbs_stats *out) {
+  if (!ctx || !out) return NBS_ERR_NULL;
+  *out = ctx->stats;
+  return NBS_OK;
+}
+
+bool nbs__heads_empty(const nbs_context *ctx) {
+  switch (ctx->work_kind) {
+  case NBS__WORK_SCREENING:
+    return nbs__screening_heads_empty(ctx);
+  case NBS__WORK_NBS:
+    return nbs__nbs_heads_empty(ctx);
+  default:
+    return true;
+  }
+}

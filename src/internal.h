@@ -1,0 +1,198 @@
+/*
+ * Internal interface shared by the core (context.c, input.c) and the algorithm files
+ * (direct.c, screening.c, sorting.c, munjiza_nbs.c). Internal names use the `nbs__`
+ * prefix; none of them is exported from the shared library.
+ *
+ * How a detection runs (context.c, nbs_detect):
+ *   1. nbs__prepare validates the input in one pass and measures it: bounding box and
+ *      largest radius, from which it derives the grid (cell edge and cells per axis).
+ *   2. The algorithm chosen from the table runs on an nbs__run. It takes its arrays from
+ *      the context's work block (nbs__work_reserve), walks its cells and hands each pair
+ *      its mask yields to nbs__offer, which applies the distance test (contact mode) and
+ *      stores the pair (nbs__emit).
+ *   3. The core records the statistics.
+ *
+ * Adding an algorithm: write `nbs_status nbs__NAME(nbs__run *run)` in its own file, add it
+ * to the table in context.c and a value to nbs_algorithm, and it is tested against direct by
+ * tests/test_agreement.c as soon as it is in the list there.
+ */
+#ifndef NBS_INTERNAL_H
+#define NBS_INTERNAL_H
+
+#include "nbs/nbs.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdbool.h>
+#include <stdint.h>
+#include <string.h>
+
+/* Largest number of cells on one axis of a regular grid. Cell coordinates, padded by one
+ * cell on each side, then fit int32 with room to spare, and the rounding analysis of
+ * nbs__prepare (cell edge margin 2^-18) holds for it. */
+#define NBS__AXIS_MAX ((int64_t)1 << 30)
+
+/* Head marking. The book marks a list as "old" by adding a large offset (2N) to its head;
+ * with int32 heads and N up to 2^31 - 1 that overflows, so a marked head stores -2 - k
+ * instead. Empty is -1, an unmarked list starts at k >= 0, a marked one at -2 - k <= -2. */
+#define NBS__EMPTY (-1)
+static inline int32_t nbs__mark(int32_t head) { return -2 - head; }
+static inline int32_t nbs__unmark(int32_t head) { return head < NBS__EMPTY ? -2 - head : head; }
+static inline bool nbs__is_marked(int32_t head) { return head < NBS__EMPTY; }
+
+/* The regular grid of a scene (the book's integerisation, eq. 3.26):
+ *   cell coordinate on axis a = Int((x_a - lo[a]) * inv_edge), 0-based.
+ * edge is a hair (2^-18 relative) larger than the largest diameter, so that round-off in
+ * this formula and in the distance test can never put a contacting pair in cells that are
+ * not neighbours (see nbs__prepare for the argument). */
+typedef struct nbs__grid {
+  int dim;
+  double lo[3], hi[3]; /* bounding box of the centres */
+  double edge;         /* cell edge; +inf when diameters are so large that every pair may touch */
+  double inv_edge;     /* 1 / edge (0 when edge is +inf) */
+  int64_t n[3];        /* cells per axis; -1 when the axis exceeds NBS__AXIS_MAX or overflows */
+  bool fits;           /* every axis has 1 <= n <= NBS__AXIS_MAX */
+  double rmax;         /* largest radius */
+} nbs__grid;
+
+static inline int32_t nbs__cell(const nbs__grid *g, const double *x, int axis) {
+  return (int32_t)((x[axis] - g->lo[axis]) * g->inv_edge);
+}
+
+struct nbs_context {
+  nbs_allocator allocator;
+  size_t cell_budget;
+  size_t max_pairs;
+
+  size_t bytes, peak_bytes;
+
+  /* The work block: one allocation reused by every algorithm. work_kind says which layout
+   * it holds (0: none or unknown contents). Algorithms that keep list heads in it rely on
+   * "all heads are empty between detections" and reset work_kind to 0 if they stop early
+   * with heads dirty, so the next detection initialises them again. */
+  void *work;
+  size_t work_size;
+  int work_kind;
+  int64_t work_cap[4];
+
+  /* The pair buffer (buffer mode) and the batch used in callback mode. */
+  nbs_pair *pairs;
+  size_t pairs_cap, pairs_count;
+  bool pairs_valid;
+
+  nbs_stats stats;
+  char error[256];
+  int64_t error_element;
+};
+
+typedef struct nbs__run {
+  nbs_context *ctx;
+  int dim;
+  int32_t n;
+  const double *x; /* n * dim coordinates */
+  const double *r; /* n radii or NULL */
+  double d2;       /* diameter^2 when r is NULL */
+  nbs_mode mode;
+  nbs__grid grid;
+
+  /* pair sink */
+  nbs_pair *buf;
+  size_t count, cap;
+  nbs_pair_fn callback;
+  void *user;
+  uint64_t candidates, emitted;
+
+  /* filled by the algorithm for the statistics */
+  nbs_algorithm ran;
+  size_t work_bytes;
+  bool compressed;
+  int64_t cells[3];
+} nbs__run;
+
+/* ---- memory (context.c) ---- */
+void *nbs__alloc(nbs_context *ctx, size_t size);
+void nbs__free(nbs_context *ctx, void *p, size_t size);
+/* Makes ctx->work at least `bytes` long. When it has to reallocate, the old contents are
+ * lost and work_kind becomes 0; on failure the old block is kept (NBS_ERR_NOMEM). */
+nbs_status nbs__work_reserve(nbs_context *ctx, size_t bytes);
+
+/* ---- errors (context.c) ---- */
+/* Records status with a formatted detail (element -1 when none) and returns status. */
+nbs_status nbs__fail(nbs_context *ctx, nbs_status status, int64_t element, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
+#endif
+    ;
+#define NBS__TRY(expr)                                                                        \
+  do {                                                                                        \
+    nbs_status nbs__s = (expr);                                                               \
+    if (nbs__s != NBS_OK) return nbs__s;                                                      \
+  } while (0)
+
+/* ---- input (input.c) ---- */
+/* Validates `in` and fills run->grid. Names the first offending element. */
+nbs_status nbs__prepare(nbs__run *run, const nbs_input *in);
+
+/* ---- pair sink (context.c) ---- */
+/* Called when the batch is full: delivers it to the callback, or grows the buffer. */
+nbs_status nbs__flush(nbs__run *run);
+
+static inline nbs_status nbs__emit(nbs__run *run, int32_t a, int32_t b) {
+  if (run->count == run->cap) {
+    nbs_status s = nbs__flush(run);
+    if (s != NBS_OK) return s;
+  }
+  nbs_pair p;
+  p.i = a < b ? a : b;
+  p.j = a < b ? b : a;
+  run->buf[run->count++] = p;
+  run->emitted++;
+  return NBS_OK;
+}
+
+/* The contact test of the contract: |xa - xb|^2 <= (ra + rb)^2 in double. */
+static inline bool nbs__touch(const nbs__run *run, int32_t a, int32_t b) {
+  const double *pa = run->x + (size_t)a * (size_t)run->dim;
+  const double *pb = run->x + (size_t)b * (size_t)run->dim;
+  double dx = pa[0] - pb[0], dy = pa[1] - pb[1];
+  double s = dx * dx + dy * dy;
+  if (run->dim == 3) {
+    double dz = pa[2] - pb[2];
+    s += dz * dz;
+  }
+  double lim;
+  if (run->r) {
+    double rr = run->r[a] + run->r[b];
+    lim = rr * rr;
+  } else {
+    lim = run->d2;
+  }
+  return s <= lim;
+}
+
+/* A pair yielded by an algorithm's cell mask: counted as a candidate, tested in contact
+ * mode, emitted if it passes (or always in candidate mode). */
+static inline nbs_status nbs__offer(nbs__run *run, int32_t a, int32_t b) {
+  run->candidates++;
+  if (run->mode == NBS_MODE_CONTACTS && !nbs__touch(run, a, b)) return NBS_OK;
+  return nbs__emit(run, a, b);
+}
+
+/* ---- algorithms (one file each) ---- */
+nbs_status nbs__direct(nbs__run *run);
+nbs_status nbs__screening(nbs__run *run);
+nbs_status nbs__sorting(nbs__run *run);
+nbs_status nbs__nbs(nbs__run *run);
+
+/* Work-block layouts, for work_kind. */
+enum { NBS__WORK_NONE = 0, NBS__WORK_SCREENING = 1, NBS__WORK_SORTING = 2, NBS__WORK_NBS = 3 };
+
+/* ---- test hooks (not part of the API; used by tests/ against the static library) ---- */
+/* True when every list head in the context's NBS / screening layout is empty (or when the
+ * work block holds no such layout). nbs__heads_empty dispatches on work_kind to the
+ * algorithm file that owns the layout. */
+bool nbs__heads_empty(const nbs_context *ctx);
+bool nbs__screening_heads_empty(const nbs_context *ctx);
+bool nbs__nbs_heads_empty(const nbs_context *ctx);
+
+#endif /* NBS_INTERNAL_H */

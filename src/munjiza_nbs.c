@@ -1,0 +1,432 @@
+/*
+ * Munjiza-NBS contact detection ("No Binary Search"; book section 3.8 for 2D, section 3.10
+ * for 3D and its generalisation, pp. 103-128).
+ *
+ * Elements are mapped onto cells of edge d >= the largest diameter (the book's
+ * integerisation, eq. 3.26; grid.edge here), so that only elements in the same or in
+ * neighbouring cells can touch. Instead of an array of cells (screening, whose memory grows
+ * with the number of cells) NBS keeps one level of singly connected lists per axis, built and
+ * torn down per detection:
+ *
+ *   2D:  y-lists B[ny] + Y[N]            one list per row of cells
+ *        x-lists A[2][nx] + X[N]         one list per cell of the central row (set 0) and of
+ *                                        the row below it (set 1)
+ *   3D:  z-lists C[nz] + Z[N]            one list per layer
+ *        y-lists B[2][ny] + Y[N]         rows of the central layer (set 0), of the layer
+ *                                        below it (set 1)
+ *        x-lists A[2][nx] + X[N]         cells of the central row (set 0), of its neighbour
+ *                                        rows (set 1, eqs. 3.78-3.79)
+ *
+ * A list is found non-empty by looping over the elements of the list one level up, never by
+ * looping over cells, and each list is removed by looping over the elements that built it
+ * (resetting only the heads they touched). Time is therefore proportional to N whatever the
+ * packing density and the extent of the domain (eqs. 3.63-3.64), and memory is
+ * ny + 2nx + 2N integers in 2D (eq. 3.65), 3N + nz + 2ny + 2nx in 3D (eq. 3.80).
+ *
+ * Deviations from the book's text, all of them representation only:
+ *  - 0-based element indices, and the end of a list is NBS__EMPTY (-1);
+ *  - each head array is padded by one cell on each side, so that a cell coordinate i is
+ *    stored at index i + 1 and i - 1, i + 1 are always valid indices;
+ *  - a list is marked "old" by storing -2 - head (nbs__mark) instead of adding 2N, which
+ *    would overflow int32 for large N; a marked head read as a neighbour goes through
+ *    nbs__unmark. Lists of set 1 are never marked.
+ *
+ * The work block (ctx->work, work_kind NBS__WORK_NBS) holds, as int32:
+ *   [ C: nz+2 ] [ B0: ny+2 ] [ B1: ny+2 ] [ A0: nx+2 ] [ A1: nx+2 ] [ Z: N ] [ Y: N ] [ X: N ]
+ * in 3D, and in 2D
+ *   [ B: ny+2 ] [ A0: nx+2 ] [ A1: nx+2 ] [ Y: N ] [ X: N ]
+ * where nx, ny, nz, N are the capacities ctx->work_cap[0], [1], [2], [3]. work_cap[2] is 0
+ * for the 2D layout (a 3D grid always has nz >= 1), which is how the dimension is encoded.
+ * All heads are contiguous at the start, and between detections every head is NBS__EMPTY
+ * (the book's step 0, done once when the layout is created); the next arrays need no
+ * initialisation because an element's next is always written before it is read. A detection
+ * that stops early (pair buffer failure, callback stop) leaves heads dirty, so it resets
+ * work_kind to NBS__WORK_NONE and the next detection initialises the layout again.
+ */
+#include "internal.h"
+
+/* ---- the work-block layout ----------------------------------------------------------- */
+
+typedef struct nbs__nbs_layout {
+  int dim;
+  int64_t heads; /* number of int32 heads, all at the start of the block */
+  size_t bytes;  /* heads and next arrays */
+  int32_t *C;    /* z-list heads (3D only) */
+  int32_t *B0;   /* y-list heads; in 2D the only set */
+  int32_t *B1;   /* y-list heads of the layer below the central one (3D only) */
+  int32_t *A0;   /* x-list heads of the central row */
+  int32_t *A1;   /* x-list heads of the neighbouring rows */
+  int32_t *Z, *Y, *X; /* next arrays (Z in 3D only) */
+} nbs__nbs_layout;
+
+/* Number of heads for capacities cap[] = {nx, ny, nz (0 in 2D), N}, padding included. */
+static int64_t nbs__nbs_head_count(int dim, const int64_t cap[4]) {
+  int64_t h = 2 * (cap[0] + 2); /* A[2][nx] */
+  if (dim == 3) {
+    h += 2 * (cap[1] + 2); /* B[2][ny] */
+    h += cap[2] + 2;       /* C[nz] */
+  } else {
+    h += cap[1] + 2; /* B[ny] */
+  }
+  return h;
+}
+
+/* Bytes of the whole layout: heads and (dim) next arrays of N int32 each (eqs. 3.65, 3.80). */
+static uint64_t nbs__nbs_layout_bytes(int dim, const int64_t cap[4]) {
+  uint64_t ints = (uint64_t)nbs__nbs_head_count(dim, cap) + (uint64_t)dim * (uint64_t)cap[3];
+  return ints * sizeof(int32_t);
+}
+
+/* Points the arrays of *L into `work`, laid out for dimension dim and capacities cap[]. */
+static void nbs__nbs_layout_at(nbs__nbs_layout *L, void *work, int dim, const int64_t cap[4]) {
+  int32_t *w = work;
+  L->dim = dim;
+  L->heads = nbs__nbs_head_count(dim, cap);
+  L->bytes = (size_t)nbs__nbs_layout_bytes(dim, cap);
+  if (dim == 3) {
+    L->C = w;
+    w += cap[2] + 2;
+    L->B0 = w;
+    w += cap[1] + 2;
+    L->B1 = w;
+    w += cap[1] + 2;
+  } else {
+    L->C = NULL;
+    L->B0 = w;
+    w += cap[1] + 2;
+    L->B1 = NULL;
+  }
+  L->A0 = w;
+  w += cap[0] + 2;
+  L->A1 = w;
+  w += cap[0] + 2;
+  if (dim == 3) {
+    L->Z = w;
+    w += cap[3];
+  } else {
+    L->Z = NULL;
+  }
+  L->Y = w;
+  w += cap[3];
+  L->X = w;
+}
+
+/* The dimension of the NBS layout that ctx->work holds (see the file comment). */
+static int nbs__nbs_layout_dim(const nbs_context *ctx) { return ctx->work_cap[2] > 0 ? 3 : 2; }
+
+bool nbs__nbs_heads_empty(const nbs_context *ctx) {
+  if (ctx->work_kind != NBS__WORK_NBS) return true;
+  const int32_t *h = ctx->work;
+  int64_t count = nbs__nbs_head_count(nbs__nbs_layout_dim(ctx), ctx->work_cap);
+  for (int64_t i = 0; i < count; i++) {
+    if (h[i] != NBS__EMPTY) return false;
+  }
+  return true;
+}
+
+/* ---- helpers of the detection -------------------------------------------------------- */
+
+/* Padded cell coordinate of element k on `axis`: 1 + Int((x - xmin) / d) (eq. 3.26, whose
+ * book form is 1-based as well). dim is a constant at every call, so this folds away. */
+static inline int32_t nbs__nbs_cell(const nbs__grid *g, const double *x, int dim, int32_t k,
+                                    int axis) {
+  return 1 + nbs__cell(g, x + (size_t)k * (size_t)dim, axis);
+}
+
+/* Heads are dirty when a detection stops in the middle: forget the layout, so that the next
+ * detection sets every head to empty again (step 0). */
+static nbs_status nbs__nbs_abort(nbs__run *run, nbs_status s) {
+  run->ctx->work_kind = NBS__WORK_NONE;
+  return s;
+}
+
+/* Checks the central cell, whose x-list (set 0, linked by X) starts at element c, with the
+ * contact mask (2D: the mask of section 3.8, cells (ix-1,iy-1) (ix,iy-1) (ix+1,iy-1)
+ * (ix-1,iy); 3D: the 13 cells of eq. 3.73):
+ *   - the cell itself: every element against those after it in the list (each pair once);
+ *   - the cell (ix-1) of the central row, nb[0]: A0[ix-1], unmarked by the caller;
+ *   - the cells ix-1, ix, ix+1 of the neighbouring rows, nb[1..3]: A1[ix-1], A1[ix],
+ *     A1[ix+1]. In 2D they are row iy-1; in 3D set 1 merges rows (iy-1,iz), (iy-1,iz-1),
+ *     (iy,iz-1), (iy+1,iz-1), so these three lists cover the 3 cells of row iy-1 in layer
+ *     iz and the 9 cells of layer iz-1.
+ * Together 4 (2D) or 13 (3D) neighbour cells: each pair of neighbouring cells is visited
+ * from exactly one of the two. */
+static inline nbs_status nbs__nbs_check_cell(nbs__run *run, const int32_t *X, int32_t c,
+                                             const int32_t nb[4]) {
+  for (int32_t a = c; a != NBS__EMPTY; a = X[a]) {
+    for (int32_t b = X[a]; b != NBS__EMPTY; b = X[b]) NBS__TRY(nbs__offer(run, a, b));
+  }
+  for (int l = 0; l < 4; l++) {
+    if (nb[l] == NBS__EMPTY) continue;
+    for (int32_t a = c; a != NBS__EMPTY; a = X[a]) {
+      for (int32_t b = nb[l]; b != NBS__EMPTY; b = X[b]) NBS__TRY(nbs__offer(run, a, b));
+    }
+  }
+  return NBS_OK;
+}
+
+/* Propagates an error of the pair sink, forgetting the (now dirty) layout. */
+#define NBS__NBS_TRY(expr)                                                                    \
+  do {                                                                                        \
+    nbs_status nbs__s = (expr);                                                               \
+    if (nbs__s != NBS_OK) return nbs__nbs_abort(run, nbs__s);                                 \
+  } while (0)
+
+/* ---- 2D (section 3.8) ---------------------------------------------------------------- */
+
+static nbs_status nbs__nbs_2d(nbs__run *run, const nbs__nbs_layout *L) {
+  const nbs__grid *g = &run->grid;
+  const double *x = run->x;
+  const int32_t n = run->n;
+  int32_t *restrict B = L->B0;
+  int32_t *restrict A0 = L->A0;
+  int32_t *restrict A1 = L->A1;
+  int32_t *restrict Y = L->Y;
+  int32_t *restrict X = L->X;
+
+  /* Mapping onto rows: integerise y and push each element on its y-list (the book's
+   * eqs. 3.34-3.35 with one coordinate): Y[k] = B[iy]; B[iy] = k. */
+  for (int32_t k = 0; k < n; k++) {
+    int32_t iy = nbs__nbs_cell(g, x, 2, k, 1);
+    Y[k] = B[iy];
+    B[iy] = k;
+  }
+
+  /* Loop over the elements: the first element found in a "new" row makes it the central
+   * row. */
+  for (int32_t k = 0; k < n; k++) {
+    int32_t iy = nbs__nbs_cell(g, x, 2, k, 1);
+    if (nbs__is_marked(B[iy])) continue;
+    const int32_t row = B[iy];
+    B[iy] = nbs__mark(row); /* mark the row "old" */
+    /* Row iy-1 may have been central already: read its head unmarked. */
+    const int32_t below = nbs__unmark(B[iy - 1]);
+
+    /* x-lists of set 0: the elements of the central row iy. */
+    for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) {
+      int32_t ix = nbs__nbs_cell(g, x, 2, e, 0);
+      X[e] = A0[ix];
+      A0[ix] = e;
+    }
+    /* x-lists of set 1: the elements of the neighbouring row iy-1. */
+    for (int32_t e = below; e != NBS__EMPTY; e = Y[e]) {
+      int32_t ix = nbs__nbs_cell(g, x, 2, e, 0);
+      X[e] = A1[ix];
+      A1[ix] = e;
+    }
+
+    /* Loop over the central row: the first element in a "new" cell makes it the central
+     * cell; mark it and check it with the contact mask. */
+    for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) {
+      int32_t ix = nbs__nbs_cell(g, x, 2, e, 0);
+      if (nbs__is_marked(A0[ix])) continue;
+      const int32_t c = A0[ix];
+      A0[ix] = nbs__mark(c);
+      const int32_t nb[4] = {nbs__unmark(A0[ix - 1]), A1[ix - 1], A1[ix], A1[ix + 1]};
+      NBS__NBS_TRY(nbs__nbs_check_cell(run, X, c, nb));
+    }
+
+    /* Removal of the x-lists: reset only the heads the two rows touched. */
+    for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) A0[nbs__nbs_cell(g, x, 2, e, 0)] = NBS__EMPTY;
+    for (int32_t e = below; e != NBS__EMPTY; e = Y[e]) A1[nbs__nbs_cell(g, x, 2, e, 0)] = NBS__EMPTY;
+  }
+
+  /* Removal of the y-lists, by a loop over the elements (eqs. 3.36-3.37 for rows). */
+  for (int32_t k = 0; k < n; k++) B[nbs__nbs_cell(g, x, 2, k, 1)] = NBS__EMPTY;
+  return NBS_OK;
+}
+
+/* ---- 3D (section 3.10; the numbered steps are those of the pseudocode on p. 127) ----- */
+
+/* Pushes the elements of the y-list starting at e onto the x-lists A (set 1). */
+#define NBS__NBS_PUSH_ROW(first, A)                                                           \
+  for (int32_t e = (first); e != NBS__EMPTY; e = Y[e]) {                                      \
+    int32_t ix = nbs__nbs_cell(g, x, 3, e, 0);                                                \
+    X[e] = (A)[ix];                                                                           \
+    (A)[ix] = e;                                                                              \
+  }
+
+/* Removes the x-lists of A that the elements of the y-list starting at e built. */
+#define NBS__NBS_CLEAR_ROW(first, A)                                                          \
+  for (int32_t e = (first); e != NBS__EMPTY; e = Y[e]) (A)[nbs__nbs_cell(g, x, 3, e, 0)] = NBS__EMPTY;
+
+static nbs_status nbs__nbs_3d(nbs__run *run, const nbs__nbs_layout *L) {
+  const nbs__grid *g = &run->grid;
+  const double *x = run->x;
+  const int32_t n = run->n;
+  int32_t *restrict C = L->C;
+  int32_t *restrict B0 = L->B0;
+  int32_t *restrict B1 = L->B1;
+  int32_t *restrict A0 = L->A0;
+  int32_t *restrict A1 = L->A1;
+  int32_t *restrict Z = L->Z;
+  int32_t *restrict Y = L->Y;
+  int32_t *restrict X = L->X;
+
+  /* Step 1: map every element onto its z-list (layer): Z[k] = C[iz]; C[iz] = k. All
+   * z-lists are "new" (unmarked). */
+  for (int32_t k = 0; k < n; k++) {
+    int32_t iz = nbs__nbs_cell(g, x, 3, k, 2);
+    Z[k] = C[iz];
+    C[iz] = k;
+  }
+
+  /* Step 2: loop over the elements; the first one in a "new" z-list makes it the central
+   * layer. */
+  for (int32_t k = 0; k < n; k++) {
+    int32_t iz = nbs__nbs_cell(g, x, 3, k, 2);
+    if (nbs__is_marked(C[iz])) continue;
+    const int32_t layer = C[iz];
+    C[iz] = nbs__mark(layer); /* mark the layer "old" */
+    /* Layer iz-1 may have been central already: read its head unmarked. */
+    const int32_t under = nbs__unmark(C[iz - 1]);
+
+    /* Step 3: the elements of the central layer onto the y-lists of set 0. */
+    for (int32_t e = layer; e != NBS__EMPTY; e = Z[e]) {
+      int32_t iy = nbs__nbs_cell(g, x, 3, e, 1);
+      Y[e] = B0[iy];
+      B0[iy] = e;
+    }
+    /* Step 4: the elements of the neighbouring layer iz-1 onto the y-lists of set 1. */
+    for (int32_t e = under; e != NBS__EMPTY; e = Z[e]) {
+      int32_t iy = nbs__nbs_cell(g, x, 3, e, 1);
+      Y[e] = B1[iy];
+      B1[iy] = e;
+    }
+
+    /* Step 5: loop over the central layer; the first element in a "new" row (iy,iz) makes
+     * it the central row. */
+    for (int32_t r = layer; r != NBS__EMPTY; r = Z[r]) {
+      int32_t iy = nbs__nbs_cell(g, x, 3, r, 1);
+      if (nbs__is_marked(B0[iy])) continue;
+      const int32_t row = B0[iy];
+      B0[iy] = nbs__mark(row); /* mark the row "old" */
+      /* The neighbouring rows of eq. 3.79: (iy-1,iz) may have been central already (read
+       * unmarked); rows of layer iz-1 are set 1 and never marked. */
+      const int32_t nrow[4] = {nbs__unmark(B0[iy - 1]), B1[iy - 1], B1[iy], B1[iy + 1]};
+
+      /* Step 6: the elements of the central row onto the x-lists of set 0. */
+      NBS__NBS_PUSH_ROW(row, A0)
+      /* Step 7: the elements of the neighbouring rows onto the x-lists of set 1. */
+      for (int l = 0; l < 4; l++) {
+        NBS__NBS_PUSH_ROW(nrow[l], A1)
+      }
+
+      /* Step 8: loop over the central row; the first element in a "new" cell (ix,iy,iz)
+       * makes it the central cell: mark it and check it with the 13-cell mask (eq. 3.73). */
+      for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) {
+        int32_t ix = nbs__nbs_cell(g, x, 3, e, 0);
+        if (nbs__is_marked(A0[ix])) continue;
+        const int32_t c = A0[ix];
+        A0[ix] = nbs__mark(c);
+        const int32_t nb[4] = {nbs__unmark(A0[ix - 1]), A1[ix - 1], A1[ix], A1[ix + 1]};
+        NBS__NBS_TRY(nbs__nbs_check_cell(run, X, c, nb));
+      }
+
+      /* Step 9: remove the x-lists of the central row. */
+      NBS__NBS_CLEAR_ROW(row, A0)
+      /* Step 10: remove the x-lists of the neighbouring rows. */
+      for (int l = 0; l < 4; l++) {
+        NBS__NBS_CLEAR_ROW(nrow[l], A1)
+      }
+    }
+
+    /* Step 11: remove the y-lists of the central layer and of layer iz-1. */
+    for (int32_t e = layer; e != NBS__EMPTY; e = Z[e]) B0[nbs__nbs_cell(g, x, 3, e, 1)] = NBS__EMPTY;
+    for (int32_t e = under; e != NBS__EMPTY; e = Z[e]) B1[nbs__nbs_cell(g, x, 3, e, 1)] = NBS__EMPTY;
+  }
+
+  /* Finally remove the z-lists, by a loop over the elements. */
+  for (int32_t k = 0; k < n; k++) C[nbs__nbs_cell(g, x, 3, k, 2)] = NBS__EMPTY;
+  return NBS_OK;
+}
+
+#undef NBS__NBS_PUSH_ROW
+#undef NBS__NBS_CLEAR_ROW
+#undef NBS__NBS_TRY
+
+/* ---- the dispatcher ------------------------------------------------------------------ */
+
+/* An axis capacity grown with 1/8 slack, so that a domain creeping outwards step after
+ * step does not re-lay the block every time; never beyond what an axis can need. */
+static int64_t nbs__nbs_grow(int64_t need) {
+  int64_t c = need + need / 8;
+  return c < NBS__AXIS_MAX ? c : NBS__AXIS_MAX;
+}
+
+nbs_status nbs__nbs(nbs__run *run) {
+  nbs_context *ctx = run->ctx;
+  const nbs__grid *g = &run->grid;
+  const int dim = run->dim;
+
+  run->ran = NBS_NBS;
+  run->compressed = false;
+  run->work_bytes = 0;
+  run->cells[0] = g->n[0];
+  run->cells[1] = g->n[1];
+  run->cells[2] = dim == 3 ? g->n[2] : 1;
+
+  if (!g->fits) {
+    return nbs__fail(ctx, NBS_ERR_EXTENT, -1,
+                     "nbs: the grid needs more than %lld cells on an axis (x %lld, y %lld%s%lld "
+                     "cells; -1: overflow); use 'auto' or 'sorting'",
+                     (long long)NBS__AXIS_MAX, (long long)g->n[0], (long long)g->n[1],
+                     dim == 3 ? ", z " : "", dim == 3 ? (long long)g->n[2] : 0LL);
+  }
+
+  /* What this detection needs: {nx, ny, nz (0 in 2D), N}. */
+  const int64_t need[4] = {g->n[0], g->n[1], dim == 3 ? g->n[2] : 0, run->n};
+  const uint64_t need_heads = (uint64_t)nbs__nbs_head_count(dim, need) * sizeof(int32_t);
+  if (need_heads > ctx->cell_budget) {
+    return nbs__fail(ctx, NBS_ERR_BUDGET, -1,
+                     "nbs: the head arrays need %llu bytes (%lld x %lld%s%lld cells), the cell "
+                     "budget is %zu bytes",
+                     (unsigned long long)need_heads, (long long)g->n[0], (long long)g->n[1],
+                     dim == 3 ? " x " : "", dim == 3 ? (long long)g->n[2] : 0LL,
+                     ctx->cell_budget);
+  }
+
+  const bool same = ctx->work_kind == NBS__WORK_NBS && nbs__nbs_layout_dim(ctx) == dim;
+  bool fits = same;
+  for (int a = 0; a < 4 && fits; a++) fits = need[a] <= ctx->work_cap[a];
+
+  if (!fits) {
+    int64_t cap[4];
+    if (!same) {
+      /* First use (or another layout was in the block): exactly the need. */
+      for (int a = 0; a < 4; a++) cap[a] = need[a];
+    } else {
+      /* Growth: keep what the old layout could hold; axes that grow get 1/8 slack. */
+      for (int a = 0; a < 3; a++) {
+        cap[a] = need[a] > ctx->work_cap[a] ? nbs__nbs_grow(need[a]) : ctx->work_cap[a];
+      }
+      cap[3] = need[3] > ctx->work_cap[3] ? need[3] : ctx->work_cap[3];
+      /* The heads must stay within the budget: drop the slack, then the old capacities. */
+      if ((uint64_t)nbs__nbs_head_count(dim, cap) * sizeof(int32_t) > ctx->cell_budget) {
+        for (int a = 0; a < 3; a++) {
+          cap[a] = need[a] > ctx->work_cap[a] ? need[a] : ctx->work_cap[a];
+        }
+      }
+      if ((uint64_t)nbs__nbs_head_count(dim, cap) * sizeof(int32_t) > ctx->cell_budget) {
+        for (int a = 0; a < 3; a++) cap[a] = need[a];
+      }
+    }
+    const uint64_t bytes = nbs__nbs_layout_bytes(dim, cap);
+    if (bytes > SIZE_MAX) {
+      return nbs__fail(ctx, NBS_ERR_NOMEM, -1, "nbs: %llu bytes of work arrays cannot be addressed",
+                       (unsigned long long)bytes);
+    }
+    NBS__TRY(nbs__work_reserve(ctx, (size_t)bytes));
+    /* Step 0 (eqs. 3.32-3.33 for lists): every head empty, once for this layout. */
+    int32_t *h = ctx->work;
+    const int64_t count = nbs__nbs_head_count(dim, cap);
+    for (int64_t i = 0; i < count; i++) h[i] = NBS__EMPTY;
+    ctx->work_kind = NBS__WORK_NBS;
+    for (int a = 0; a < 4; a++) ctx->work_cap[a] = cap[a];
+  }
+
+  nbs__nbs_layout L;
+  nbs__nbs_layout_at(&L, ctx->work, dim, ctx->work_cap);
+  run->work_bytes = L.bytes;
+  return dim == 3 ? nbs__nbs_3d(run, &L) : nbs__nbs_2d(run, &L);
+}

@@ -1,0 +1,205 @@
+/*
+ * Every algorithm x both modes x 2D and 3D against direct checking, on the scenes of
+ * scenes/: contacts identical to direct's (sorted, byte for byte), candidates a superset of
+ * the contacts, every candidate and contact reported once with i < j, and after every
+ * detection all list heads back to empty.
+ */
+#include "internal.h"
+#include "test.h"
+#include "util.h"
+
+typedef struct case_def {
+  const char *label;
+  scene_kind kind;
+  int64_t n;
+  double fraction;
+  double offset;
+  double diameter;
+} case_def;
+
+static const case_def cases[] = {
+    {"uniform dense", SCENE_UNIFORM, 1500, 0.6, 0.0, 1.0},
+    {"uniform medium", SCENE_UNIFORM, 1500, 0.3, 0.0, 1.0},
+    {"uniform loose", SCENE_UNIFORM, 1500, 0.05, 0.0, 1.0},
+    {"sparse", SCENE_SPARSE, 1500, 0.005, 0.0, 1.0},
+    {"clustered", SCENE_CLUSTERED, 1500, 0.5, 0.0, 1.0},
+    {"lattice at touching", SCENE_LATTICE, 1000, 0.5, 0.0, 1.0},
+    {"lattice, diameter 0.1", SCENE_LATTICE, 1000, 0.5, 0.0, 0.1},
+    {"on cell faces", SCENE_FACES, 1000, 0.5, 0.0, 1.0},
+    {"negative coordinates", SCENE_UNIFORM, 1000, 0.4, -1234.5, 1.0},
+    {"offset 1e9", SCENE_UNIFORM, 1000, 0.4, 1e9, 1.0},
+    {"all identical", SCENE_IDENTICAL, 150, 0.5, 3.25, 1.0},
+    {"one far away", SCENE_FAR, 1000, 0.4, 0.0, 1.0},
+    {"per-element radii", SCENE_WIDE, 1500, 0.4, 0.0, 1.0},
+    {"huge domain", SCENE_HUGE, 1500, 0.5, 0.0, 1.0},
+    {"tiny diameter", SCENE_UNIFORM, 800, 0.3, 0.0, 1e-200},
+    {"n = 0", SCENE_UNIFORM, 0, 0.5, 0.0, 1.0},
+    {"n = 1", SCENE_UNIFORM, 1, 0.5, 0.0, 1.0},
+    {"n = 2 touching", SCENE_LATTICE, 2, 0.5, 0.0, 1.0},
+    {"n = 2 apart", SCENE_IDENTICAL, 2, 0.5, 0.0, 1.0},
+};
+
+static const nbs_algorithm algorithms[] = {NBS_AUTO, NBS_SCREENING, NBS_SORTING, NBS_NBS};
+
+/* An algorithm may refuse a scene only for its documented reasons: screening's cell array
+ * over budget, or a grid too wide to index for screening and NBS. */
+static bool may_refuse(nbs_algorithm a, nbs_status s) {
+  return (a == NBS_SCREENING && (s == NBS_ERR_BUDGET || s == NBS_ERR_EXTENT)) ||
+         (a == NBS_NBS && (s == NBS_ERR_BUDGET || s == NBS_ERR_EXTENT));
+}
+
+static bool well_formed(const pair_list *l, int64_t n) {
+  for (size_t k = 0; k < l->count; k++) {
+    if (l->p[k].i < 0 || l->p[k].i >= l->p[k].j || l->p[k].j >= n) return false;
+    if (k > 0 && l->p[k - 1].i == l->p[k].i && l->p[k - 1].j == l->p[k].j) return false;
+  }
+  return true;
+}
+
+static void run_case(const case_def *c, int dim, nbs_context *ctx) {
+  scene_def def = scene_default_def();
+  def.kind = c->kind;
+  def.dim = dim;
+  def.n = c->n;
+  def.fraction = c->fraction;
+  def.offset = c->offset;
+  def.diameter = c->diameter;
+  def.seed = 7;
+  scene s;
+  char err[200];
+  ASSERT_MSG(scene_generate(&def, &s, err, sizeof err) == 0, "%s", err);
+  if (c->kind == SCENE_IDENTICAL && c->n == 2) s.coords[dim] = 5.0; /* apart */
+
+  pair_list ref, ref_cand;
+  ASSERT_OK(detect_sorted(ctx, &s, NBS_DIRECT, NBS_MODE_CONTACTS, &ref));
+  ASSERT_OK(detect_sorted(ctx, &s, NBS_DIRECT, NBS_MODE_CANDIDATES, &ref_cand));
+  CHECK_EQ(ref_cand.count, (size_t)(s.n * (s.n - 1) / 2 > 0 ? s.n * (s.n - 1) / 2 : 0));
+  CHECK_MSG(well_formed(&ref, s.n), "%s %dD: direct's pairs are not well formed", c->label, dim);
+  if (c->kind == SCENE_LATTICE && c->diameter == 1.0 && c->n == 1000) {
+    /* every lattice neighbour touches: 3 * 10 * 10 * 9 in 3D, 2 * 32 * 31 - ... in 2D */
+    if (dim == 3) CHECK_EQ(ref.count, 2700);
+  }
+  if (c->kind == SCENE_IDENTICAL && c->n > 2) CHECK_EQ(ref.count, s.n * (s.n - 1) / 2);
+
+  for (size_t a = 0; a < sizeof algorithms / sizeof *algorithms; a++) {
+    nbs_algorithm algo = algorithms[a];
+    const char *name = nbs_algorithm_name(algo);
+    pair_list got, cand;
+    nbs_status st = detect_sorted(ctx, &s, algo, NBS_MODE_CONTACTS, &got);
+    CHECK_MSG(nbs__heads_empty(ctx), "%s %dD %s: list heads not empty after detection",
+              c->label, dim, name);
+    if (st != NBS_OK) {
+      CHECK_MSG(may_refuse(algo, st), "%s %dD %s: status %s (%s)", c->label, dim, name,
+                nbs_status_name(st), nbs_context_error(ctx));
+      continue;
+    }
+    nbs_stats stats;
+    nbs_last_stats(ctx, &stats);
+    CHECK_MSG(algo == NBS_AUTO ? stats.algorithm != NBS_AUTO : stats.algorithm == algo,
+              "%s %dD %s: stats name algorithm %d", c->label, dim, name, (int)stats.algorithm);
+    CHECK_EQ(stats.pairs, got.count);
+    CHECK_MSG(pair_lists_equal(&got, &ref), "%s %dD %s: %zu contacts, direct finds %zu",
+              c->label, dim, name, got.count, ref.count);
+
+    st = detect_sorted(ctx, &s, algo, NBS_MODE_CANDIDATES, &cand);
+    CHECK_MSG(nbs__heads_empty(ctx), "%s %dD %s candidates: list heads not empty", c->label, dim,
+              name);
+    CHECK_MSG(st == NBS_OK, "%s %dD %s candidates: %s", c->label, dim, name, nbs_status_name(st));
+    if (st == NBS_OK) {
+      CHECK_MSG(well_formed(&cand, s.n), "%s %dD %s: candidates repeat a pair or break i < j",
+                c->label, dim, name);
+      CHECK_MSG(pair_list_contains(&cand, &ref), "%s %dD %s: candidates miss a contact",
+                c->label, dim, name);
+      nbs_last_stats(ctx, &stats);
+      CHECK_EQ(stats.candidates, cand.count);
+    }
+    pair_list_free(&got);
+    pair_list_free(&cand);
+  }
+  pair_list_free(&ref);
+  pair_list_free(&ref_cand);
+  scene_free(&s);
+}
+
+static void test_scenes_2d(void) {
+  nbs_context *ctx;
+  ASSERT_OK(nbs_context_create(NULL, &ctx));
+  for (size_t c = 0; c < sizeof cases / sizeof *cases; c++) run_case(&cases[c], 2, ctx);
+  nbs_context_destroy(ctx);
+}
+
+static void test_scenes_3d(void) {
+  nbs_context *ctx;
+  ASSERT_OK(nbs_context_create(NULL, &ctx));
+  for (size_t c = 0; c < sizeof cases / sizeof *cases; c++) run_case(&cases[c], 3, ctx);
+  nbs_context_destroy(ctx);
+}
+
+/* A fresh context per algorithm, so that no layout left by another algorithm helps. */
+static void test_fresh_contexts(void) {
+  scene_def def = scene_default_def();
+  def.n = 1200;
+  for (int dim = 2; dim <= 3; dim++) {
+    def.dim = dim;
+    scene s;
+    char err[200];
+    ASSERT_MSG(scene_generate(&def, &s, err, sizeof err) == 0, "%s", err);
+    nbs_context *ctx;
+    ASSERT_OK(nbs_context_create(NULL, &ctx));
+    pair_list ref;
+    ASSERT_OK(detect_sorted(ctx, &s, NBS_DIRECT, NBS_MODE_CONTACTS, &ref));
+    nbs_context_destroy(ctx);
+    for (size_t a = 0; a < sizeof algorithms / sizeof *algorithms; a++) {
+      ASSERT_OK(nbs_context_create(NULL, &ctx));
+      pair_list got;
+      CHECK_STATUS(detect_sorted(ctx, &s, algorithms[a], NBS_MODE_CONTACTS, &got), NBS_OK);
+      CHECK_MSG(pair_lists_equal(&got, &ref), "%dD %s in a fresh context differs", dim,
+                nbs_algorithm_name(algorithms[a]));
+      pair_list_free(&got);
+      nbs_context_destroy(ctx);
+    }
+    pair_list_free(&ref);
+    scene_free(&s);
+  }
+}
+
+/* Elements that move between detections, as in a simulation: the same context, every step. */
+static void test_time_steps(void) {
+  scene_def def = scene_default_def();
+  def.n = 1000;
+  def.fraction = 0.4;
+  for (int dim = 2; dim <= 3; dim++) {
+    def.dim = dim;
+    scene s;
+    char err[200];
+    ASSERT_MSG(scene_generate(&def, &s, err, sizeof err) == 0, "%s", err);
+    nbs_context *ctx;
+    ASSERT_OK(nbs_context_create(NULL, &ctx));
+    for (int step = 0; step < 6; step++) {
+      for (int64_t k = 0; k < s.n * dim; k++) s.coords[k] += 0.37 * ((k * 7 + step) % 5 - 2);
+      pair_list ref;
+      ASSERT_OK(detect_sorted(ctx, &s, NBS_DIRECT, NBS_MODE_CONTACTS, &ref));
+      for (size_t a = 0; a < sizeof algorithms / sizeof *algorithms; a++) {
+        pair_list got;
+        CHECK_STATUS(detect_sorted(ctx, &s, algorithms[a], NBS_MODE_CONTACTS, &got), NBS_OK);
+        CHECK_MSG(pair_lists_equal(&got, &ref), "%dD step %d %s differs", dim, step,
+                  nbs_algorithm_name(algorithms[a]));
+        CHECK_TRUE(nbs__heads_empty(ctx));
+        pair_list_free(&got);
+      }
+      pair_list_free(&ref);
+    }
+    nbs_context_destroy(ctx);
+    scene_free(&s);
+  }
+}
+
+int main(int argc, char **argv) {
+  static const test_case tests[] = {
+      {"scenes_2d", test_scenes_2d},
+      {"scenes_3d", test_scenes_3d},
+      {"fresh_contexts", test_fresh_contexts},
+      {"time_steps", test_time_steps},
+  };
+  return test_main(argc, argv, tests, sizeof tests / sizeof *tests);
+}

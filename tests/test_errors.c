@@ -1,0 +1,309 @@
+/*
+ * Every error of the API, provoked: each returns its status with a message (naming the
+ * element where there is one), never crashes, and leaves the context usable. Allocation
+ * failure is provoked at every allocation a detection reaches.
+ */
+#include "internal.h"
+#include "test.h"
+#include "util.h"
+
+#include <math.h>
+
+static scene make_scene(scene_kind kind, int dim, int64_t n) {
+  scene_def def = scene_default_def();
+  def.kind = kind;
+  def.dim = dim;
+  def.n = n;
+  scene s;
+  char err[200];
+  if (scene_generate(&def, &s, err, sizeof err) != 0) {
+    fprintf(stderr, "scene: %s\n", err);
+    abort();
+  }
+  return s;
+}
+
+/* After an error: the next correct detection agrees with direct. */
+static void check_usable(nbs_context *ctx) {
+  scene s = make_scene(SCENE_UNIFORM, 3, 300);
+  pair_list ref, got;
+  ASSERT_OK(detect_sorted(ctx, &s, NBS_DIRECT, NBS_MODE_CONTACTS, &ref));
+  ASSERT_OK(detect_sorted(ctx, &s, NBS_NBS, NBS_MODE_CONTACTS, &got));
+  CHECK_TRUE(pair_lists_equal(&ref, &got));
+  CHECK_TRUE(nbs__heads_empty(ctx));
+  CHECK_TRUE(nbs_context_error(ctx)[0] == '\0');
+  pair_list_free(&ref);
+  pair_list_free(&got);
+  scene_free(&s);
+}
+
+static void test_null_and_ranges(void) {
+  nbs_context *ctx;
+  CHECK_STATUS(nbs_context_create(NULL, NULL), NBS_ERR_NULL);
+  ASSERT_OK(nbs_context_create(NULL, &ctx));
+  scene s = make_scene(SCENE_UNIFORM, 3, 100);
+  nbs_input in = scene_input(&s);
+  CHECK_STATUS(nbs_detect(NULL, &in, NULL), NBS_ERR_NULL);
+  CHECK_STATUS(nbs_detect(ctx, NULL, NULL), NBS_ERR_NULL);
+
+  nbs_input bad = in;
+  bad.coords = NULL;
+  CHECK_STATUS(nbs_detect(ctx, &bad, NULL), NBS_ERR_NULL);
+  bad = in;
+  bad.n = -1;
+  CHECK_STATUS(nbs_detect(ctx, &bad, NULL), NBS_ERR_COUNT);
+  bad.n = (int64_t)1 << 31;
+  CHECK_STATUS(nbs_detect(ctx, &bad, NULL), NBS_ERR_COUNT);
+  CHECK_TRUE(strstr(nbs_context_error(ctx), "2147483648") != NULL);
+  for (int dim = -1; dim <= 5; dim++) {
+    if (dim == 2 || dim == 3) continue;
+    bad = in;
+    bad.dim = dim;
+    CHECK_STATUS(nbs_detect(ctx, &bad, NULL), NBS_ERR_DIM);
+  }
+  nbs_detect_def def = nbs_default_detect_def();
+  def.algorithm = (nbs_algorithm)99;
+  CHECK_STATUS(nbs_detect(ctx, &in, &def), NBS_ERR_ALGORITHM);
+  def = nbs_default_detect_def();
+  def.mode = (nbs_mode)7;
+  CHECK_STATUS(nbs_detect(ctx, &in, &def), NBS_ERR_MODE);
+  size_t count = 123;
+  CHECK_TRUE(nbs_pairs(ctx, &count) == NULL && count == 0);
+  CHECK_STATUS(nbs_last_stats(ctx, NULL), NBS_ERR_NULL);
+  check_usable(ctx);
+
+  /* N = 0 needs no coordinates at all. */
+  bad = in;
+  bad.n = 0;
+  bad.coords = NULL;
+  CHECK_STATUS(nbs_detect(ctx, &bad, NULL), NBS_OK);
+  CHECK_TRUE(nbs_pairs(ctx, &count) == NULL && count == 0);
+  scene_free(&s);
+  nbs_context_destroy(ctx);
+  nbs_context_destroy(NULL);
+}
+
+static void test_bad_numbers(void) {
+  nbs_context *ctx;
+  ASSERT_OK(nbs_context_create(NULL, &ctx));
+  const double bads[] = {NAN, INFINITY, -INFINITY};
+  for (int dim = 2; dim <= 3; dim++) {
+    scene s = make_scene(SCENE_UNIFORM, dim, 100);
+    nbs_input in = scene_input(&s);
+    for (int b = 0; b < 3; b++) {
+      for (int axis = 0; axis < dim; axis++) {
+        double keep = s.coords[17 * dim + axis];
+        s.coords[17 * dim + axis] = bads[b];
+        for (int a = 0; a < NBS_ALGORITHM_COUNT; a++) {
+          nbs_detect_def def = nbs_default_detect_def();
+          def.algorithm = (nbs_algorithm)a;
+          CHECK_STATUS(nbs_detect(ctx, &in, &def), NBS_ERR_COORD);
+          CHECK_EQ(nbs_context_error_element(ctx), 17);
+          CHECK_MSG(strstr(nbs_context_error(ctx), "element 17") != NULL, "message: %s",
+                    nbs_context_error(ctx));
+        }
+        s.coords[17 * dim + axis] = keep;
+      }
+    }
+    /* radii: <= 0 or not finite, at element 5 */
+    const double bad_r[] = {0.0, -1.0, NAN, INFINITY, -0.0};
+    double *radii = malloc((size_t)s.n * sizeof *radii);
+    for (int64_t k = 0; k < s.n; k++) radii[k] = 0.5;
+    in.radii = radii;
+    for (int b = 0; b < 5; b++) {
+      radii[5] = bad_r[b];
+      CHECK_STATUS(nbs_detect(ctx, &in, NULL), NBS_ERR_RADIUS);
+      CHECK_EQ(nbs_context_error_element(ctx), 5);
+      CHECK_MSG(strstr(nbs_context_error(ctx), "element 5") != NULL, "message: %s",
+                nbs_context_error(ctx));
+    }
+    radii[5] = 0.5;
+    CHECK_STATUS(nbs_detect(ctx, &in, NULL), NBS_OK);
+    in.radii = NULL;
+    for (int b = 0; b < 5; b++) {
+      in.diameter = bad_r[b];
+      CHECK_STATUS(nbs_detect(ctx, &in, NULL), NBS_ERR_RADIUS);
+      CHECK_EQ(nbs_context_error_element(ctx), -1);
+    }
+    free(radii);
+    scene_free(&s);
+  }
+  check_usable(ctx);
+  nbs_context_destroy(ctx);
+}
+
+static void test_budget_extent(void) {
+  nbs_context_def cdef = nbs_default_context_def();
+  cdef.cell_budget = 4096;
+  nbs_context *ctx;
+  ASSERT_OK(nbs_context_create(&cdef, &ctx));
+  scene s = make_scene(SCENE_SPARSE, 3, 2000);
+  nbs_input in = scene_input(&s);
+  nbs_detect_def def = nbs_default_detect_def();
+  def.algorithm = NBS_SCREENING;
+  CHECK_STATUS(nbs_detect(ctx, &in, &def), NBS_ERR_BUDGET);
+  CHECK_MSG(strstr(nbs_context_error(ctx), "budget") != NULL, "message: %s",
+            nbs_context_error(ctx));
+  def.algorithm = NBS_NBS;
+  CHECK_STATUS(nbs_detect(ctx, &in, &def), NBS_ERR_BUDGET);
+  def.algorithm = NBS_AUTO; /* auto never refuses: it falls back to sorting */
+  CHECK_STATUS(nbs_detect(ctx, &in, &def), NBS_OK);
+  nbs_stats st;
+  nbs_last_stats(ctx, &st);
+  CHECK_EQ(st.algorithm, NBS_SORTING);
+  scene_free(&s);
+  nbs_context_destroy(ctx);
+
+  /* A domain wider than any grid: screening and NBS say so; sorting and auto succeed. */
+  ASSERT_OK(nbs_context_create(NULL, &ctx));
+  s = make_scene(SCENE_FAR, 3, 500);
+  in = scene_input(&s);
+  def.algorithm = NBS_SCREENING;
+  CHECK_STATUS(nbs_detect(ctx, &in, &def), NBS_ERR_EXTENT);
+  def.algorithm = NBS_NBS;
+  CHECK_STATUS(nbs_detect(ctx, &in, &def), NBS_ERR_EXTENT);
+  def.algorithm = NBS_SORTING;
+  CHECK_STATUS(nbs_detect(ctx, &in, &def), NBS_OK);
+  nbs_last_stats(ctx, &st);
+  CHECK_TRUE(st.compressed);
+  check_usable(ctx);
+  scene_free(&s);
+  nbs_context_destroy(ctx);
+}
+
+static int stop_after_two(void *user, const nbs_pair *pairs, size_t count) {
+  (void)pairs;
+  int *calls = user;
+  (void)count;
+  return ++*calls >= 2;
+}
+
+static void test_pair_limits(void) {
+  scene s = make_scene(SCENE_IDENTICAL, 3, 300); /* 44850 pairs */
+  nbs_input in = scene_input(&s);
+  for (int a = 0; a < NBS_ALGORITHM_COUNT; a++) {
+    nbs_context_def cdef = nbs_default_context_def();
+    cdef.max_pairs = 10000;
+    nbs_context *ctx;
+    ASSERT_OK(nbs_context_create(&cdef, &ctx));
+    nbs_detect_def def = nbs_default_detect_def();
+    def.algorithm = (nbs_algorithm)a;
+    CHECK_STATUS(nbs_detect(ctx, &in, &def), NBS_ERR_PAIRS);
+    nbs_stats st;
+    nbs_last_stats(ctx, &st);
+    CHECK_EQ(st.pairs, 10000);
+    CHECK_TRUE(nbs__heads_empty(ctx) || ctx->work_kind == NBS__WORK_NONE);
+    int calls = 0;
+    def.callback = stop_after_two;
+    def.user = &calls;
+    CHECK_STATUS(nbs_detect(ctx, &in, &def), NBS_ERR_STOPPED);
+    CHECK_EQ(calls, 2);
+    check_usable(ctx);
+    nbs_context_destroy(ctx);
+  }
+  scene_free(&s);
+}
+
+static void test_allocator_def(void) {
+  nbs_context_def cdef = nbs_default_context_def();
+  test_alloc ta = {0, 0, 0, -1, 0};
+  cdef.allocator = test_allocator(&ta);
+  cdef.allocator.free = NULL;
+  nbs_context *ctx = (nbs_context *)&cdef;
+  CHECK_STATUS(nbs_context_create(&cdef, &ctx), NBS_ERR_ARGUMENT);
+  CHECK_TRUE(ctx == NULL);
+}
+
+static int count_pairs(void *user, const nbs_pair *pairs, size_t count) {
+  (void)pairs;
+  *(size_t *)user += count;
+  return 0;
+}
+
+/* Fails the k-th allocation for every k a detection reaches, in every algorithm, mode and
+ * sink: NBS_ERR_NOMEM each time, nothing leaked, and the context then correct. */
+static void test_allocation_failure(void) {
+  for (int dim = 2; dim <= 3; dim++) {
+    scene s = make_scene(SCENE_IDENTICAL, dim, 120); /* 7140 pairs: the buffer grows */
+    scene u = make_scene(SCENE_UNIFORM, dim, 800);
+    for (int a = 0; a < NBS_ALGORITHM_COUNT; a++) {
+      for (int sink = 0; sink < 2; sink++) {
+        for (int scn = 0; scn < 2; scn++) {
+          const scene *sc = scn ? &u : &s;
+          nbs_input in = scene_input(sc);
+          pair_list ref;
+          {
+            nbs_context *rc;
+            ASSERT_OK(nbs_context_create(NULL, &rc));
+            ASSERT_OK(detect_sorted(rc, sc, NBS_DIRECT, NBS_MODE_CONTACTS, &ref));
+            nbs_context_destroy(rc);
+          }
+          long reached = 0;
+          for (long k = 0;; k++) {
+            test_alloc ta = {0, 0, 0, k, 0};
+            nbs_context_def cdef = nbs_default_context_def();
+            cdef.allocator = test_allocator(&ta);
+            nbs_context *ctx;
+            nbs_status st = nbs_context_create(&cdef, &ctx);
+            if (st != NBS_OK) {
+              CHECK_STATUS(st, NBS_ERR_NOMEM);
+              CHECK_EQ(ta.live, 0);
+              continue;
+            }
+            nbs_detect_def def = nbs_default_detect_def();
+            def.algorithm = (nbs_algorithm)a;
+            size_t counted = 0;
+            if (sink) {
+              def.callback = count_pairs;
+              def.user = &counted;
+            }
+            st = nbs_detect(ctx, &in, &def);
+            if (ta.failures == 0) {
+              CHECK_STATUS(st, NBS_OK);
+              if (sink) CHECK_EQ(counted, ref.count);
+              nbs_context_destroy(ctx);
+              CHECK_EQ(ta.live, 0);
+              reached = k;
+              break;
+            }
+            CHECK_MSG(st == NBS_ERR_NOMEM, "%dD %s sink %d: allocation %ld failed, status %s",
+                      dim, nbs_algorithm_name((nbs_algorithm)a), sink, k, nbs_status_name(st));
+            /* the context stays usable */
+            ta.fail_at = -1;
+            pair_list got;
+            CHECK_STATUS(detect_sorted(ctx, sc, (nbs_algorithm)a, NBS_MODE_CONTACTS, &got),
+                         NBS_OK);
+            CHECK_MSG(pair_lists_equal(&got, &ref), "%dD %s: wrong pairs after failure %ld",
+                      dim, nbs_algorithm_name((nbs_algorithm)a), k);
+            CHECK_TRUE(nbs__heads_empty(ctx));
+            pair_list_free(&got);
+            nbs_context_destroy(ctx);
+            CHECK_EQ(ta.live, 0);
+            CHECK_EQ(ta.live_bytes, 0);
+            if (k > 100) {
+              TEST_FAIL_AT("more than 100 allocations in one detection");
+              break;
+            }
+          }
+          CHECK_MSG(reached >= 2, "%dD %s: only %ld allocations were reached", dim,
+                    nbs_algorithm_name((nbs_algorithm)a), reached);
+          pair_list_free(&ref);
+        }
+      }
+    }
+    scene_free(&s);
+    scene_free(&u);
+  }
+}
+
+int main(int argc, char **argv) {
+  static const test_case tests[] = {
+      {"null_and_ranges", test_null_and_ranges},
+      {"bad_numbers", test_bad_numbers},
+      {"budget_extent", test_budget_extent},
+      {"pair_limits", test_pair_limits},
+      {"allocator_def", test_allocator_def},
+      {"allocation_failure", test_allocation_failure},
+  };
+  return test_main(argc, argv, tests, sizeof tests / sizeof *tests);
+}

@@ -1,0 +1,169 @@
+/*
+ * Memory: the byte counts of the book's formulas, the library's accounting against the
+ * allocator's, and no allocation in detections after the first (a simulation's time steps).
+ */
+#include "internal.h"
+#include "test.h"
+#include "util.h"
+
+static scene make_scene(scene_kind kind, int dim, int64_t n, double fraction) {
+  scene_def def = scene_default_def();
+  def.kind = kind;
+  def.dim = dim;
+  def.n = n;
+  def.fraction = fraction;
+  scene s;
+  char err[200];
+  if (scene_generate(&def, &s, err, sizeof err) != 0) abort();
+  return s;
+}
+
+/* NBS: 2D ny + 2nx + 2N integers (eq. 3.65), 3D nz + 2ny + 2nx + 3N (eq. 3.80); the padding
+ * cells on each side of each head array are the fixed overhead. */
+static void test_nbs_formula(void) {
+  const double fractions[] = {0.5, 0.05, 0.001};
+  for (int dim = 2; dim <= 3; dim++) {
+    for (int f = 0; f < 3; f++) {
+      for (int64_t n = 1000; n <= 64000; n *= 4) {
+        scene s = make_scene(SCENE_UNIFORM, dim, n, fractions[f]);
+        nbs_context *ctx;
+        ASSERT_OK(nbs_context_create(NULL, &ctx));
+        nbs_input in = scene_input(&s);
+        nbs_detect_def def = nbs_default_detect_def();
+        def.algorithm = NBS_NBS;
+        ASSERT_OK(nbs_detect(ctx, &in, &def));
+        nbs_stats st;
+        nbs_last_stats(ctx, &st);
+        int64_t ints = dim == 2 ? st.cells[1] + 2 * st.cells[0] + 2 * n
+                                : st.cells[2] + 2 * st.cells[1] + 2 * st.cells[0] + 3 * n;
+        int64_t formula = ints * 4;
+        int64_t extra = (int64_t)st.work_bytes - formula;
+        CHECK_MSG(extra >= 0 && extra <= 128,
+                  "%dD n=%lld fraction %g: NBS holds %zu work bytes, the book's formula %lld",
+                  dim, (long long)n, fractions[f], st.work_bytes, (long long)formula);
+        /* everything the context holds: work, pairs, the context itself */
+        CHECK_EQ(nbs_context_bytes(ctx),
+                 st.work_bytes + st.pair_bytes + sizeof(struct nbs_context));
+        nbs_context_destroy(ctx);
+        scene_free(&s);
+      }
+    }
+  }
+}
+
+/* Sorting: 3N integers in 2D, 4N in 3D, however the elements are spread. */
+static void test_sorting_formula(void) {
+  const scene_kind kinds[] = {SCENE_UNIFORM, SCENE_SPARSE, SCENE_FAR, SCENE_HUGE};
+  for (int dim = 2; dim <= 3; dim++) {
+    for (int k = 0; k < 4; k++) {
+      scene s = make_scene(kinds[k], dim, 20000, 0.5);
+      nbs_context *ctx;
+      ASSERT_OK(nbs_context_create(NULL, &ctx));
+      nbs_input in = scene_input(&s);
+      nbs_detect_def def = nbs_default_detect_def();
+      def.algorithm = NBS_SORTING;
+      ASSERT_OK(nbs_detect(ctx, &in, &def));
+      nbs_stats st;
+      nbs_last_stats(ctx, &st);
+      int64_t formula = (int64_t)(dim + 1) * 20000 * 4;
+      CHECK_MSG((int64_t)st.work_bytes >= formula && (int64_t)st.work_bytes <= formula + 128,
+                "%dD %s: sorting holds %zu bytes, formula %lld", dim,
+                scene_kind_name(kinds[k]), st.work_bytes, (long long)formula);
+      nbs_context_destroy(ctx);
+      scene_free(&s);
+    }
+  }
+}
+
+/* Screening: one head per cell (with padding) and a next per element. */
+static void test_screening_cells(void) {
+  for (int dim = 2; dim <= 3; dim++) {
+    scene s = make_scene(SCENE_UNIFORM, dim, 5000, 0.3);
+    nbs_context *ctx;
+    ASSERT_OK(nbs_context_create(NULL, &ctx));
+    nbs_input in = scene_input(&s);
+    nbs_detect_def def = nbs_default_detect_def();
+    def.algorithm = NBS_SCREENING;
+    ASSERT_OK(nbs_detect(ctx, &in, &def));
+    nbs_stats st;
+    nbs_last_stats(ctx, &st);
+    int64_t cells = st.cells[0] * st.cells[1] * (dim == 3 ? st.cells[2] : 1);
+    int64_t padded = (st.cells[0] + 2) * (st.cells[1] + 2) * (dim == 3 ? st.cells[2] + 2 : 1);
+    CHECK_MSG((int64_t)st.work_bytes >= 4 * (cells + 5000) &&
+                  (int64_t)st.work_bytes <= 4 * (padded + 5000) + 128,
+              "%dD: screening holds %zu bytes for %lld cells", dim, st.work_bytes,
+              (long long)cells);
+    nbs_context_destroy(ctx);
+    scene_free(&s);
+  }
+}
+
+/* After the first detection, the same or a smaller N allocates nothing. */
+static void test_no_allocation_after_first(void) {
+  const nbs_algorithm algos[] = {NBS_AUTO, NBS_DIRECT, NBS_SCREENING, NBS_SORTING, NBS_NBS};
+  for (int dim = 2; dim <= 3; dim++) {
+    scene s = make_scene(SCENE_UNIFORM, dim, 6000, 0.5);
+    for (size_t a = 0; a < sizeof algos / sizeof *algos; a++) {
+      for (int mode = 0; mode < 2; mode++) {
+        test_alloc ta = {0, 0, 0, -1, 0};
+        nbs_context_def cdef = nbs_default_context_def();
+        cdef.allocator = test_allocator(&ta);
+        nbs_context *ctx;
+        ASSERT_OK(nbs_context_create(&cdef, &ctx));
+        nbs_input in = scene_input(&s);
+        nbs_detect_def def = nbs_default_detect_def();
+        def.algorithm = algos[a];
+        def.mode = (nbs_mode)mode;
+        ASSERT_OK(nbs_detect(ctx, &in, &def));
+        CHECK_EQ(nbs_context_bytes(ctx), ta.live_bytes);
+        long calls = ta.calls;
+        for (int rep = 0; rep < 3; rep++) ASSERT_OK(nbs_detect(ctx, &in, &def));
+        /* smaller subsets: the first n elements of the same scene */
+        for (int64_t n = 5000; n >= 0; n -= 1250) {
+          in.n = n;
+          ASSERT_OK(nbs_detect(ctx, &in, &def));
+        }
+        CHECK_MSG(ta.calls == calls, "%dD %s mode %d: %ld allocations after the first detection",
+                  dim, nbs_algorithm_name(algos[a]), mode, ta.calls - calls);
+        CHECK_TRUE(nbs_context_peak_bytes(ctx) >= nbs_context_bytes(ctx));
+        nbs_context_destroy(ctx);
+        CHECK_EQ(ta.live, 0);
+      }
+    }
+    scene_free(&s);
+  }
+}
+
+/* nbs_context_reserve makes even the first detection allocation-free (sorting's layout
+ * depends only on N). */
+static void test_reserve(void) {
+  scene s = make_scene(SCENE_UNIFORM, 3, 4000, 0.5);
+  test_alloc ta = {0, 0, 0, -1, 0};
+  nbs_context_def cdef = nbs_default_context_def();
+  cdef.allocator = test_allocator(&ta);
+  nbs_context *ctx;
+  ASSERT_OK(nbs_context_create(&cdef, &ctx));
+  ASSERT_OK(nbs_context_reserve(ctx, 4000, 100000));
+  CHECK_STATUS(nbs_context_reserve(ctx, -1, 0), NBS_ERR_COUNT);
+  CHECK_STATUS(nbs_context_reserve(NULL, 1, 0), NBS_ERR_NULL);
+  long calls = ta.calls;
+  nbs_input in = scene_input(&s);
+  nbs_detect_def def = nbs_default_detect_def();
+  def.algorithm = NBS_SORTING;
+  ASSERT_OK(nbs_detect(ctx, &in, &def));
+  CHECK_EQ(ta.calls, calls);
+  nbs_context_destroy(ctx);
+  CHECK_EQ(ta.live, 0);
+  scene_free(&s);
+}
+
+int main(int argc, char **argv) {
+  static const test_case tests[] = {
+      {"nbs_formula", test_nbs_formula},
+      {"sorting_formula", test_sorting_formula},
+      {"screening_cells", test_screening_cells},
+      {"no_allocation_after_first", test_no_allocation_after_first},
+      {"reserve", test_reserve},
+  };
+  return test_main(argc, argv, tests, sizeof tests / sizeof *tests);
+}

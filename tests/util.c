@@ -1,0 +1,93 @@
+#include "util.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+nbs_input scene_input(const scene *s) {
+  nbs_input in;
+  memset(&in, 0, sizeof in);
+  in.dim = s->dim;
+  in.n = s->n;
+  in.coords = s->coords;
+  in.radii = s->radii;
+  in.diameter = s->diameter;
+  return in;
+}
+
+nbs_status detect_sorted(nbs_context *ctx, const scene *s, nbs_algorithm algo, nbs_mode mode,
+                         pair_list *out) {
+  out->p = NULL;
+  out->count = 0;
+  nbs_input in = scene_input(s);
+  nbs_detect_def def = nbs_default_detect_def();
+  def.algorithm = algo;
+  def.mode = mode;
+  nbs_status st = nbs_detect(ctx, &in, &def);
+  if (st != NBS_OK) return st;
+  size_t count;
+  const nbs_pair *p = nbs_pairs(ctx, &count);
+  out->p = malloc((count ? count : 1) * sizeof *out->p);
+  if (!out->p) abort();
+  if (count) memcpy(out->p, p, count * sizeof *p);
+  out->count = count;
+  nbs_sort_pairs(out->p, count);
+  return NBS_OK;
+}
+
+void pair_list_free(pair_list *l) {
+  free(l->p);
+  l->p = NULL;
+  l->count = 0;
+}
+
+bool pair_lists_equal(const pair_list *a, const pair_list *b) {
+  return a->count == b->count &&
+         (a->count == 0 || memcmp(a->p, b->p, a->count * sizeof *a->p) == 0);
+}
+
+bool pair_list_contains(const pair_list *super, const pair_list *sub) {
+  size_t i = 0;
+  for (size_t k = 0; k < sub->count; k++) {
+    while (i < super->count &&
+           (super->p[i].i < sub->p[k].i ||
+            (super->p[i].i == sub->p[k].i && super->p[i].j < sub->p[k].j)))
+      i++;
+    if (i == super->count || super->p[i].i != sub->p[k].i || super->p[i].j != sub->p[k].j)
+      return false;
+  }
+  return true;
+}
+
+/* The size is stored in front of each block so that free can check it. */
+static void *test_alloc_fn(void *opaque, size_t size) {
+  test_alloc *ta = opaque;
+  long call = ta->calls++;
+  if (ta->fail_at >= 0 && call == ta->fail_at) {
+    ta->failures++;
+    return NULL;
+  }
+  size_t *p = malloc(size + 16);
+  if (!p) return NULL;
+  p[0] = size;
+  ta->live++;
+  ta->live_bytes += size;
+  return (char *)p + 16;
+}
+
+static void test_free_fn(void *opaque, void *ptr, size_t size) {
+  test_alloc *ta = opaque;
+  size_t *p = (size_t *)(void *)((char *)ptr - 16);
+  if (p[0] != size) {
+    fprintf(stderr, "free with size %zu of a block of %zu bytes\n", size, p[0]);
+    abort();
+  }
+  ta->live--;
+  ta->live_bytes -= size;
+  free(p);
+}
+
+nbs_allocator test_allocator(test_alloc *ta) {
+  nbs_allocator a = {test_alloc_fn, test_free_fn, ta};
+  return a;
+}

@@ -1,0 +1,35 @@
+/* Helpers shared by the tests: detection into a sorted list, a counting allocator that can
+ * fail its k-th allocation. */
+#ifndef NBS_TEST_UTIL_H
+#define NBS_TEST_UTIL_H
+
+#include "nbs/nbs.h"
+#include "scenes.h"
+
+#include <stdbool.h>
+
+typedef struct pair_list {
+  nbs_pair *p;
+  size_t count;
+} pair_list;
+
+/* Runs one detection and copies its pairs, sorted. Returns the status. */
+nbs_status detect_sorted(nbs_context *ctx, const scene *s, nbs_algorithm algo, nbs_mode mode,
+                         pair_list *out);
+void pair_list_free(pair_list *l);
+bool pair_lists_equal(const pair_list *a, const pair_list *b);
+/* True when every pair of sub is in super (both sorted). */
+bool pair_list_contains(const pair_list *super, const pair_list *sub);
+nbs_input scene_input(const scene *s);
+
+/* A test allocator: counts live allocations and bytes, and fails the allocation numbered
+ * fail_at (0-based count since reset), or none when fail_at < 0. */
+typedef struct test_alloc {
+  long calls, live;
+  size_t live_bytes;
+  long fail_at;
+  long failures;
+} test_alloc;
+nbs_allocator test_allocator(test_alloc *ta);
+
+#endif
