@@ -1,0 +1,301 @@
+/*
+ * nbs_bench: times every nbs algorithm on one scene and prints one machine-readable line
+ * per algorithm (key=value fields, see bench/README.md).
+ *
+ * The scene is either generated with the shared scene generators (--scene) or read from a
+ * raw file of little-endian f64 coordinates, dim per element (--file). --write saves the
+ * scene in that format so that the peer drivers (nanoflann, CGAL, LAMMPS, scipy) time
+ * exactly the same elements in the same order.
+ *
+ * What is timed: nbs_detect() alone (coordinates in, pairs in the context's buffer out),
+ * with one context per algorithm reused over the repeats, as a simulation reuses its
+ * context every step. The first detection allocates; the minimum over the repeats is the
+ * steady state. Memory: nbs_context_peak_bytes() (everything the library held), and the
+ * process's peak resident memory above what it held before the algorithm ran (VmHWM after
+ * a reset through /proc/self/clear_refs), the figure the peer drivers report too.
+ */
+#define _POSIX_C_SOURCE 200809L
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "nbs/nbs.h"
+#include "scenes.h"
+
+static double now_seconds(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* A field of /proc/self/status in bytes ("VmHWM:", "VmRSS:"), or 0 where there is none. */
+static long long proc_status_bytes(const char *field) {
+  FILE *f = fopen("/proc/self/status", "r");
+  if (!f) return 0;
+  char line[256];
+  long long kb = 0;
+  size_t len = strlen(field);
+  while (fgets(line, sizeof line, f)) {
+    if (strncmp(line, field, len) == 0) {
+      kb = strtoll(line + len, NULL, 10);
+      break;
+    }
+  }
+  fclose(f);
+  return kb * 1024;
+}
+
+/* Resets VmHWM to the current resident size (Linux >= 4.0); harmless where unsupported. */
+static void reset_peak_rss(void) {
+  FILE *f = fopen("/proc/self/clear_refs", "w");
+  if (!f) return;
+  fputs("5", f);
+  fclose(f);
+}
+
+static void usage(FILE *out) {
+  fputs(
+      "usage: nbs_bench (--scene NAME [--n N] [--fraction F] [--seed S] [--sorted]\n"
+      "                  | --file PATH) [options]\n"
+      "  --scene NAME       uniform, sparse, clustered, huge, ... (scenes/scenes.h)\n"
+      "  --file PATH        raw little-endian f64 coordinates, DIM per element\n"
+      "  --dim D            2 or 3 (default 3)\n"
+      "  --n N              elements of a generated scene (default 1000)\n"
+      "  --fraction F       volume/area fraction of a generated scene (default 0.5)\n"
+      "  --seed S           seed of a generated scene (default 1)\n"
+      "  --sorted           order a generated scene's elements by cell (row-major)\n"
+      "  --diameter D       common diameter (default 1)\n"
+      "  --write PATH       write the scene's coordinates to PATH (raw f64)\n"
+      "  --algorithms LIST  comma-separated: auto,nbs,sorting,screening,direct\n"
+      "                     (default: all, direct only when N <= --direct-max)\n"
+      "  --direct-max N     largest N for direct by default (default 20000)\n"
+      "  --repeats K        detections per algorithm; the minimum time is reported (5)\n"
+      "  --min-time T       repeat at least until T seconds have been spent (default 0)\n"
+      "Output, one line per algorithm:\n"
+      "  tool=nbs-ALG status=ok seconds=.. ns_per_element=.. pairs=.. ran=ALG\n"
+      "  peak_bytes=.. work_bytes=.. pair_bytes=.. rss_extra_bytes=.. n=.. dim=..\n",
+      out);
+}
+
+typedef struct options {
+  const char *scene_name;
+  const char *file;
+  const char *write;
+  const char *algorithms;
+  scene_def def;
+  int repeats;
+  double min_time;
+  long long direct_max;
+} options;
+
+static int parse_args(int argc, char **argv, options *o) {
+  o->def = scene_default_def();
+  o->repeats = 5;
+  o->direct_max = 20000;
+  for (int k = 1; k < argc; k++) {
+    const char *a = argv[k];
+    const char *v = k + 1 < argc ? argv[k + 1] : NULL;
+#define NEEDS_VALUE                                                                          \
+  if (!v) {                                                                                  \
+    fprintf(stderr, "nbs_bench: %s needs a value\n", a);                                     \
+    return -1;                                                                               \
+  }                                                                                          \
+  k++
+    if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
+      usage(stdout);
+      exit(0);
+    } else if (strcmp(a, "--scene") == 0) {
+      NEEDS_VALUE;
+      o->scene_name = v;
+    } else if (strcmp(a, "--file") == 0) {
+      NEEDS_VALUE;
+      o->file = v;
+    } else if (strcmp(a, "--write") == 0) {
+      NEEDS_VALUE;
+      o->write = v;
+    } else if (strcmp(a, "--algorithms") == 0) {
+      NEEDS_VALUE;
+      o->algorithms = v;
+    } else if (strcmp(a, "--dim") == 0) {
+      NEEDS_VALUE;
+      o->def.dim = atoi(v);
+    } else if (strcmp(a, "--n") == 0) {
+      NEEDS_VALUE;
+      o->def.n = (int64_t)strtod(v, NULL);
+    } else if (strcmp(a, "--fraction") == 0) {
+      NEEDS_VALUE;
+      o->def.fraction = strtod(v, NULL);
+    } else if (strcmp(a, "--seed") == 0) {
+      NEEDS_VALUE;
+      o->def.seed = strtoull(v, NULL, 10);
+    } else if (strcmp(a, "--diameter") == 0) {
+      NEEDS_VALUE;
+      o->def.diameter = strtod(v, NULL);
+    } else if (strcmp(a, "--repeats") == 0) {
+      NEEDS_VALUE;
+      o->repeats = atoi(v);
+    } else if (strcmp(a, "--min-time") == 0) {
+      NEEDS_VALUE;
+      o->min_time = strtod(v, NULL);
+    } else if (strcmp(a, "--direct-max") == 0) {
+      NEEDS_VALUE;
+      o->direct_max = (long long)strtod(v, NULL);
+    } else if (strcmp(a, "--sorted") == 0) {
+      o->def.sorted = 1;
+    } else {
+      fprintf(stderr, "nbs_bench: unknown argument %s\n", a);
+      usage(stderr);
+      return -1;
+    }
+#undef NEEDS_VALUE
+  }
+  if (!o->scene_name == !o->file) {
+    fprintf(stderr, "nbs_bench: give exactly one of --scene and --file\n");
+    return -1;
+  }
+  if (o->repeats < 1) o->repeats = 1;
+  return 0;
+}
+
+static int read_scene_file(const char *path, int dim, double diameter, scene *s) {
+  memset(s, 0, sizeof *s);
+  FILE *f = fopen(path, "rb");
+  if (!f) {
+    fprintf(stderr, "nbs_bench: %s: %s\n", path, strerror(errno));
+    return -1;
+  }
+  if (fseek(f, 0, SEEK_END) != 0) goto fail;
+  long size = ftell(f);
+  if (size < 0 || size % (long)(dim * sizeof(double)) != 0) {
+    fprintf(stderr, "nbs_bench: %s: size %ld is not a multiple of %d doubles\n", path, size,
+            dim);
+    fclose(f);
+    return -1;
+  }
+  rewind(f);
+  s->dim = dim;
+  s->n = size / (long)(dim * sizeof(double));
+  s->diameter = diameter;
+  s->coords = malloc(size > 0 ? (size_t)size : 1);
+  if (!s->coords) goto fail;
+  if (fread(s->coords, 1, (size_t)size, f) != (size_t)size) goto fail;
+  fclose(f);
+  return 0;
+fail:
+  fprintf(stderr, "nbs_bench: cannot read %s\n", path);
+  fclose(f);
+  free(s->coords);
+  s->coords = NULL;
+  return -1;
+}
+
+static int write_scene_file(const char *path, const scene *s) {
+  FILE *f = fopen(path, "wb");
+  if (!f) {
+    fprintf(stderr, "nbs_bench: %s: %s\n", path, strerror(errno));
+    return -1;
+  }
+  size_t count = (size_t)s->n * (size_t)s->dim;
+  int ok = fwrite(s->coords, sizeof(double), count, f) == count;
+  ok = (fclose(f) == 0) && ok;
+  if (!ok) fprintf(stderr, "nbs_bench: cannot write %s\n", path);
+  return ok ? 0 : -1;
+}
+
+/* Runs one algorithm; prints its line. Returns 0, or 1 if it failed for another reason
+ * than not fitting the scene (budget, extent). */
+static int run_algorithm(nbs_algorithm alg, const scene *s, const options *o) {
+  nbs_input in = {.dim = s->dim, .n = s->n, .coords = s->coords, .radii = s->radii,
+                  .diameter = s->diameter};
+  nbs_detect_def ddef = nbs_default_detect_def();
+  ddef.algorithm = alg;
+  reset_peak_rss();
+  long long rss_base = proc_status_bytes("VmRSS:");
+  nbs_context *ctx = NULL;
+  nbs_status st = nbs_context_create(NULL, &ctx);
+  double best = -1.0, spent = 0.0;
+  int done = 0;
+  while (st == NBS_OK && (done < o->repeats || spent < o->min_time)) {
+    double t0 = now_seconds();
+    st = nbs_detect(ctx, &in, &ddef);
+    double t = now_seconds() - t0;
+    spent += t;
+    if (best < 0 || t < best) best = t;
+    done++;
+  }
+  long long rss_extra = proc_status_bytes("VmHWM:") - rss_base;
+  const char *name = nbs_algorithm_name(alg);
+  int failed = 0;
+  if (st != NBS_OK) {
+    const char *why = ctx ? nbs_context_error(ctx) : nbs_status_message(st);
+    /* Spaces would break the key=value line: the reason goes to stderr. */
+    fprintf(stderr, "nbs_bench: %s: %s\n", name, why);
+    printf("tool=nbs-%s status=%s n=%lld dim=%d\n", name, nbs_status_name(st), (long long)s->n,
+           s->dim);
+    failed = !(st == NBS_ERR_BUDGET || st == NBS_ERR_EXTENT);
+  } else {
+    size_t count = 0;
+    nbs_pairs(ctx, &count);
+    nbs_stats stats;
+    nbs_last_stats(ctx, &stats);
+    printf("tool=nbs-%s status=ok seconds=%.9g ns_per_element=%.6g pairs=%zu ran=%s "
+           "peak_bytes=%zu work_bytes=%zu pair_bytes=%zu rss_extra_bytes=%lld repeats=%d "
+           "candidates=%llu compressed=%d n=%lld dim=%d\n",
+           name, best, s->n > 0 ? 1e9 * best / (double)s->n : 0.0, count,
+           nbs_algorithm_name(stats.algorithm), nbs_context_peak_bytes(ctx), stats.work_bytes,
+           stats.pair_bytes, rss_extra, done, (unsigned long long)stats.candidates,
+           stats.compressed, (long long)s->n, s->dim);
+  }
+  fflush(stdout);
+  nbs_context_destroy(ctx);
+  return failed;
+}
+
+int main(int argc, char **argv) {
+  options o;
+  memset(&o, 0, sizeof o);
+  if (parse_args(argc, argv, &o) != 0) return 2;
+
+  scene s;
+  char err[256];
+  if (o.file) {
+    if (read_scene_file(o.file, o.def.dim, o.def.diameter, &s) != 0) return 2;
+  } else {
+    int kind = scene_kind_from_name(o.scene_name);
+    if (kind < 0) {
+      fprintf(stderr, "nbs_bench: unknown scene %s\n", o.scene_name);
+      return 2;
+    }
+    o.def.kind = (scene_kind)kind;
+    if (scene_generate(&o.def, &s, err, sizeof err) != 0) {
+      fprintf(stderr, "nbs_bench: %s\n", err);
+      return 2;
+    }
+  }
+  if (o.write && write_scene_file(o.write, &s) != 0) {
+    scene_free(&s);
+    return 2;
+  }
+
+  int failures = 0;
+  char list[256];
+  snprintf(list, sizeof list, "%s",
+           o.algorithms ? o.algorithms : "auto,nbs,sorting,screening,direct");
+  for (char *save = NULL, *tok = strtok_r(list, ",", &save); tok;
+       tok = strtok_r(NULL, ",", &save)) {
+    if (strcmp(tok, "none") == 0) continue;
+    nbs_algorithm alg;
+    if (nbs_algorithm_from_name(tok, &alg) != NBS_OK) {
+      fprintf(stderr, "nbs_bench: unknown algorithm %s\n", tok);
+      failures++;
+      continue;
+    }
+    if (alg == NBS_DIRECT && !o.algorithms && s.n > o.direct_max) continue;
+    failures += run_algorithm(alg, &s, &o);
+  }
+  scene_free(&s);
+  return failures ? 1 : 0;
+}
