@@ -1,0 +1,643 @@
+#!/usr/bin/python3
+"""The nbs benchmark suite (run it through bench/run; see bench/README.md).
+
+For each case (scene, dimension, element order, N) the scene is generated once by nbs_bench
+with the shared scene generators and written to a raw f64 file; every nbs algorithm is
+timed on it in that process, then every peer driver on the same file, one after another in
+the same run. Each tool reports the number of contact pairs; all must agree.
+
+Results: <out>/results.csv (one row per case and tool), <out>/summary.md (headline table
+and targets, computed from the rows), <out>/machine.txt and PNG plots.
+"""
+import argparse
+import csv
+import datetime
+import math
+import os
+import platform
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+PY = "/usr/bin/python3" if os.path.exists("/usr/bin/python3") else sys.executable
+
+NBS_ALGORITHMS = ["auto", "nbs", "sorting", "screening", "direct"]
+PEERS = ["nanoflann", "cgal", "scipy", "lammps", "lammps-nosort"]
+ALL_TOOLS = ["nbs"] + PEERS
+COLUMNS = ["scene", "dim", "order", "N", "fraction", "spacing", "tool", "status", "seconds",
+           "ns_per_element", "peak_bytes", "rss_extra_bytes", "work_bytes", "pair_bytes",
+           "pairs", "agree", "ran", "repeats", "note"]
+KEY = ("scene", "dim", "order", "N", "spacing")
+
+
+def log(msg):
+    print(msg, flush=True)
+
+
+def parse_line(line):
+    """key=value fields of one driver line, or None."""
+    if not line.startswith("tool="):
+        return None
+    return dict(f.split("=", 1) for f in line.split() if "=" in f)
+
+
+def sphere_volume(dim, d=1.0):
+    return math.pi / 6 * d ** 3 if dim == 3 else math.pi / 4 * d ** 2
+
+
+def fraction_for_spacing(dim, s):
+    """Fraction of a uniform scene whose mean centre spacing is s diameters."""
+    return sphere_volume(dim) / s ** dim
+
+
+def fmt_n(n):
+    e = int(round(math.log10(n))) if n > 0 else 0
+    return f"1e{e}" if n == 10 ** e else str(n)
+
+
+class Suite:
+    def __init__(self, a):
+        self.a = a
+        self.rows = []
+        self.failures = []
+        self.bin = a.build + "/bench"
+
+    # ---- running tools -------------------------------------------------------------------
+    def run_cmd(self, cmd, tool_hint, timeout):
+        t0 = time.time()
+        try:
+            p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+        except subprocess.TimeoutExpired:
+            return [{"tool": tool_hint, "status": "timeout"}], f"timeout after {timeout} s"
+        except OSError as e:
+            return [{"tool": tool_hint, "status": "missing"}], str(e)
+        lines = [x for x in (parse_line(l) for l in p.stdout.splitlines()) if x]
+        err = p.stderr.strip()
+        if not lines:
+            lines = [{"tool": tool_hint, "status": "failed"}]
+        if self.a.verbose:
+            log(f"    {' '.join(cmd)}  ({time.time() - t0:.1f} s)")
+        return lines, err
+
+    def case(self, scene, dim, order, n, fraction, spacing="", tools=None):
+        a = self.a
+        tools = tools if tools is not None else a.tools
+        tag = f"{scene} {dim}D {order} N={fmt_n(n)}" + (f" S/D={spacing}" if spacing else "")
+        log(f"== {tag}")
+        path = os.path.join(a.workdir, f"{scene}-{dim}d-{order}-{n}-{spacing or 'x'}.f64")
+        gen_scene = "uniform" if scene == "density" else scene
+        algs = [x for x in a.algorithms if x != "direct" or n <= a.direct_max]
+        cmd = [f"{self.bin}/nbs_bench", "--scene", gen_scene, "--dim", str(dim), "--n", str(n),
+               "--fraction", repr(fraction), "--seed", str(a.seed), "--repeats",
+               str(a.repeats), "--min-time", str(a.min_time), "--write", path,
+               "--algorithms", ",".join(algs) if "nbs" in tools else "none",
+               "--direct-max", str(a.direct_max)]
+        if order == "sorted":
+            cmd.append("--sorted")
+        results, err = self.run_cmd(cmd, "nbs", a.timeout)
+        if not os.path.exists(path):
+            self.fail(tag, "nbs_bench", f"no scene written: {err}")
+            return
+        if err and a.verbose:
+            log(f"    nbs_bench: {err}")
+        for peer in [t for t in PEERS if t in tools]:
+            skip = self.skip_peer(peer, scene, dim, n, path)
+            if skip:
+                results.append({"tool": peer, "status": "skipped", "note": skip})
+                continue
+            res, err = self.run_peer(peer, path, dim)
+            if err and any(r.get("status") != "ok" for r in res):
+                res[0]["note"] = err.splitlines()[-1][:200]
+            results += res
+        if not a.keep_files:
+            os.remove(path)
+            if os.path.exists(path + ".data"):
+                os.remove(path + ".data")
+        self.record(tag, dict(scene=scene, dim=dim, order=order, N=n, fraction=fraction,
+                              spacing=spacing), results)
+
+    def skip_peer(self, peer, scene, dim, n, path):
+        a = self.a
+        if n > a.peer_max_n:
+            return f"N > --peer-max-n {fmt_n(a.peer_max_n)}"
+        if scene not in ("uniform", "density") and n > a.peer_max_n_other:
+            return f"N > --peer-max-n-other {fmt_n(a.peer_max_n_other)}"
+        if peer.startswith("lammps"):
+            if peer == "lammps-nosort" and n > a.nosort_max_n:
+                return f"N > --nosort-max-n {fmt_n(a.nosort_max_n)}"
+            # LAMMPS bins the whole box (bins of half the cutoff) and clears every bin at
+            # every build: a spread-out domain needs more bins than memory holds.
+            bins = self.lammps_bins(path, dim)
+            if bins > a.lammps_max_bins:
+                return f"LAMMPS would need {bins:.3g} bins (> --lammps-max-bins)"
+        return ""
+
+    @staticmethod
+    def lammps_bins(path, dim):
+        import numpy as np
+        p = np.fromfile(path, dtype="<f8").reshape(-1, dim)
+        if len(p) == 0:
+            return 0
+        ext = p.max(axis=0) - p.min(axis=0) + 2.0  # the data file's box: bounds +- d
+        return float(np.prod(np.ceil(ext / 0.5)))
+
+    def run_peer(self, peer, path, dim):
+        a = self.a
+        common = ["--file", path, "--dim", str(dim), "--repeats", str(a.peer_repeats)]
+        if peer in ("nanoflann", "cgal"):
+            exe = f"{self.bin}/{peer}_pairs"
+            if not os.path.exists(exe):
+                return [{"tool": peer, "status": "missing"}], f"{exe} not built"
+            return self.run_cmd([exe] + common, peer, a.timeout)
+        if peer == "scipy":
+            return self.run_cmd([PY, f"{HERE}/scipy_pairs.py"] + common, peer, a.timeout)
+        extra = ["--data", path + ".data"]
+        if peer == "lammps-nosort":
+            extra.append("--no-sort")
+        return self.run_cmd([PY, f"{HERE}/lammps_pairs.py"] + common + extra, peer, a.timeout)
+
+    # ---- agreement -------------------------------------------------------------------------
+    def record(self, tag, base, results):
+        ok = [r for r in results if r.get("status") == "ok"]
+        ref = next((r for r in ok if r["tool"] == "nbs-direct"), None) or \
+            next((r for r in ok if r["tool"] == "nbs-auto"), None) or (ok[0] if ok else None)
+        for r in results:
+            row = dict(base)
+            row.update({k: r.get(k, "") for k in COLUMNS if k in r})
+            row["tool"] = r["tool"]
+            row["status"] = r.get("status", "failed")
+            if r["tool"].startswith("nbs-"):
+                row["peak_bytes"] = r.get("peak_bytes", "")
+            elif r["tool"] in ("nanoflann", "cgal", "scipy"):
+                row["peak_bytes"] = r.get("rss_extra_bytes", "")
+            if row["status"] == "ok":
+                if int(r["pairs"]) == int(ref["pairs"]):
+                    row["agree"] = "yes"
+                else:
+                    row["agree"] = "NO"
+                    self.fail(tag, r["tool"], f"{r['pairs']} pairs, but {ref['tool']} found "
+                              f"{ref['pairs']}")
+            elif row["status"] in ("failed", "timeout", "missing"):
+                self.fail(tag, r["tool"], f"status {row['status']} {r.get('note', '')}")
+            self.rows.append(row)
+            if row["status"] == "ok":
+                log(f"   {row['tool']:14s} {float(row['ns_per_element']):10.1f} ns/el "
+                    f"{int(row['pairs']):>11d} pairs  {row['agree']}"
+                    + (f"  (ran {row['ran']})" if r["tool"] == "nbs-auto" else ""))
+            else:
+                log(f"   {row['tool']:14s} {row['status']} {row.get('note', '')}")
+
+    def fail(self, tag, tool, msg):
+        self.failures.append(f"{tag}: {tool}: {msg}")
+        log(f"!!!!!!!! {tag}: {tool}: {msg}")
+
+
+# ---- the plan ---------------------------------------------------------------------------
+def plan(a):
+    """(scene, dim, order, N, fraction, spacing, tools) for every case, cheapest first."""
+    cases = []
+    for n in sorted(a.n):
+        for dim in a.dims:
+            for scene in a.scenes:
+                if scene != "uniform" and n > a.other_max_n:
+                    continue
+                for order in a.orders:
+                    frac = {"uniform": a.fraction, "sparse": a.sparse_fraction}.get(scene, 0.5)
+                    cases.append((scene, dim, order, n, frac, "", None))
+    if a.sweep_n > 0:
+        for dim in a.dims:
+            for s in a.spacings:
+                cases.append(("density", dim, "random", a.sweep_n,
+                              fraction_for_spacing(dim, s), s, None))
+    return cases
+
+
+def number_list(text, conv=float):
+    return [conv(float(x)) for x in text.split(",") if x.strip()]
+
+
+def machine_name():
+    model = "unknown-cpu"
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    slug = re.sub(r"[^a-z0-9]+", "-", model.lower()).strip("-")
+    return f"{slug}-{os.cpu_count()}cpu"
+
+
+def command_output(cmd):
+    try:
+        return subprocess.run(cmd, capture_output=True, text=True, timeout=30).stdout.strip()
+    except (OSError, subprocess.TimeoutExpired):
+        return "(unavailable)"
+
+
+def describe_machine(a, started, load_start):
+    lines = [f"date: {started}", f"command: bench/run {' '.join(a.argv)}"]
+    model, flags = "?", ""
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name") and model == "?":
+                model = line.split(":", 1)[1].strip()
+            if line.startswith("flags") and not flags:
+                fl = line.split(":", 1)[1].split()
+                flags = " ".join(f for f in fl if f in ("sse4_2", "avx", "avx2", "fma", "avx512f",
+                                                        "avx512vl", "bmi2"))
+    except OSError:
+        pass
+    mem = "?"
+    try:
+        mem = open("/proc/meminfo").readline().split(":", 1)[1].strip()
+    except OSError:
+        pass
+    cache = command_output(["sh", "-c", "lscpu | grep -i 'cache\\|MHz\\|Thread\\|Core\\|Socket'"])
+    lines += [f"nproc: {os.cpu_count()}", f"cpu: {model}", f"cpu flags (subset): {flags}",
+              f"memory: {mem}", f"kernel: {platform.release()}",
+              f"load average at start: {load_start}",
+              f"load average at end: {open('/proc/loadavg').read().strip()}",
+              "lscpu:", *["  " + x for x in cache.splitlines()],
+              f"cc: {command_output(['cc', '--version']).splitlines()[0:1]}",
+              f"c++: {command_output(['c++', '--version']).splitlines()[0:1]}",
+              f"cmake: {command_output(['cmake', '--version']).splitlines()[0:1]}",
+              f"python: {command_output([PY, '--version'])}",
+              f"nbs commit: {command_output(['git', '-C', ROOT, 'rev-parse', 'HEAD'])}"
+              + (" (work tree has changes in src/ or include/)" if command_output(
+                  ['git', '-C', ROOT, 'status', '--porcelain', '--', 'src', 'include'])
+                 else ""),
+              "debian packages:"]
+    pk = command_output(["dpkg-query", "-W", "-f", "${Package} ${Version}\\n", "lammps",
+                         "python3-scipy", "python3-numpy", "python3-matplotlib",
+                         "libnanoflann-dev", "libcgal-dev", "gcc", "g++", "cmake"])
+    lines += ["  " + x for x in pk.splitlines()]
+    return "\n".join(lines) + "\n"
+
+
+# ---- results: merge, summary, plots -------------------------------------------------------
+def key_of(r):
+    return tuple(str(r[k]) for k in KEY)
+
+
+def load_rows(path):
+    if not os.path.exists(path):
+        return []
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def write_rows(path, rows):
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=COLUMNS, extrasaction="ignore")
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: r.get(k, "") for k in COLUMNS})
+
+
+def find(rows, **kw):
+    for r in rows:
+        if all(str(r[k]) == str(v) for k, v in kw.items()) and r["status"] == "ok":
+            return r
+    return None
+
+
+def nsel(r):
+    return float(r["ns_per_element"]) if r else None
+
+
+def summary(rows, n_head):
+    out = []
+    f = lambda x: f"{x:.1f}" if x is not None else "n/a"  # noqa: E731
+    for dim in (3, 2):
+        head = {r["tool"]: r for r in rows if r["scene"] == "uniform" and r["dim"] == str(dim)
+                and r["order"] == "random" and r["N"] == str(n_head) and r["status"] == "ok"}
+        srt = {r["tool"]: r for r in rows if r["scene"] == "uniform" and r["dim"] == str(dim)
+               and r["order"] == "sorted" and r["N"] == str(n_head) and r["status"] == "ok"}
+        if not head:
+            continue
+        auto = nsel(head.get("nbs-auto"))
+        out.append(f"### {dim}D, N = {fmt_n(n_head)}, uniform, fraction 0.5\n")
+        out.append("| tool | ns/element (random order) | auto is x faster | "
+                   "ns/element (sorted order) | peak bytes/element | pairs |")
+        out.append("|---|---:|---:|---:|---:|---:|")
+        for t in [x for x in ["nbs-auto", "nbs-nbs", "nbs-sorting", "nbs-screening"] + PEERS
+                  if x in head]:
+            r = head[t]
+            ratio = nsel(r) / auto if auto else None
+            pb = float(r["peak_bytes"]) / n_head if r.get("peak_bytes") else None
+            out.append(f"| {t}{' (ran ' + r['ran'] + ')' if t == 'nbs-auto' else ''} | "
+                       f"{f(nsel(r))} | {f'{ratio:.2f}' if ratio else 'n/a'} | "
+                       f"{f(nsel(srt.get(t)))} | {f(pb)} | {r['pairs']} |")
+        out.append("")
+    # Targets, each computed from the rows.
+    t = []
+
+    def get(tool, dim=3, scene="uniform", n=n_head, order="random"):
+        return nsel(find(rows, tool=tool, dim=dim, scene=scene, N=n, order=order))
+
+    def target(name, ok, detail):
+        mark = "n/a (not measured)" if ok is None else ("met" if ok else "NOT met")
+        t.append(f"| {name} | {detail} | {mark} |")
+
+    auto3, nbs3 = get("nbs-auto"), get("nbs-nbs")
+    for lm in ("lammps", "lammps-nosort"):
+        l3 = get(lm)
+        target(f"auto <= 50 ns/element, >= 6x {lm} (3D)",
+               None if auto3 is None or l3 is None else (auto3 <= 50 and l3 / auto3 >= 6),
+               f"auto {f(auto3)} ns, {lm} {f(l3)} ns, ratio "
+               f"{f'{l3 / auto3:.2f}' if auto3 and l3 else 'n/a'}")
+    sc = get("scipy")
+    target("auto >= 40x scipy (3D)", None if auto3 is None or sc is None else sc / auto3 >= 40,
+           f"ratio {f'{sc / auto3:.1f}' if auto3 and sc else 'n/a'}")
+    for lm in ("lammps", "lammps-nosort"):
+        l3 = get(lm)
+        target(f"nbs >= 1.5x {lm} (3D)", None if nbs3 is None or l3 is None else l3 / nbs3 >= 1.5,
+               f"nbs {f(nbs3)} ns, ratio {f'{l3 / nbs3:.2f}' if nbs3 and l3 else 'n/a'}")
+        a2, l2 = get("nbs-auto", 2), get(lm, 2)
+        target(f"2D auto >= 3x {lm}", None if a2 is None or l2 is None else l2 / a2 >= 3,
+               f"auto {f(a2)} ns, {lm} {f(l2)} ns, ratio "
+               f"{f'{l2 / a2:.2f}' if a2 and l2 else 'n/a'}")
+    for tool in ("nbs-auto", "nbs-nbs"):
+        for dim in (3, 2):
+            lo, hi = get(tool, dim, n=10 ** 4), get(tool, dim, n=10 ** 7)
+            target(f"linear: {tool} {dim}D N=1e7 within 1.3x of N=1e4",
+                   None if lo is None or hi is None else hi / lo <= 1.3,
+                   f"{f(lo)} -> {f(hi)} ns, ratio {f'{hi / lo:.2f}' if lo and hi else 'n/a'}")
+    n_sc = max([int(r["N"]) for r in rows if r["scene"] in ("sparse", "clustered", "huge")
+                and r["status"] == "ok"] or [0])
+    if n_sc:
+        for tool in ("nbs-auto", "nbs-nbs"):
+            for dim in (3, 2):
+                u = find(rows, tool=tool, dim=dim, scene="uniform", N=n_sc, order="random")
+                for scene in ("sparse", "clustered", "huge"):
+                    s = find(rows, tool=tool, dim=dim, scene=scene, N=n_sc, order="random")
+                    if not (u and s):
+                        target(f"{scene} within 1.5x of uniform: {tool} {dim}D", None, "")
+                        continue
+                    rt = nsel(s) / nsel(u)
+                    mem = int(s["peak_bytes"]) / int(u["peak_bytes"])
+                    target(f"{scene} within 1.5x of uniform, memory <= uniform: {tool} {dim}D "
+                           f"N={fmt_n(n_sc)}", rt <= 1.5 and mem <= 1.0,
+                           f"time x{rt:.2f}, peak bytes x{mem:.2f}")
+    for tool in ("nbs-auto", "nbs-nbs"):
+        r = find(rows, tool=tool, dim=3, scene="uniform", N=n_head, order="random")
+        if r:
+            extra = (int(r["peak_bytes"]) - int(r["pair_bytes"] or 0)) / n_head
+            target(f"memory: {tool} peak minus pair buffer <= 40 bytes/element (3D)",
+                   extra <= 40, f"{extra:.1f} bytes/element")
+    target("threads: 2 threads >= 1.7x one thread", None,
+           "the public API has no thread count yet")
+    out.append("### Targets (3D unless said, uniform fraction 0.5, random order, N = "
+               f"{fmt_n(n_head)})\n")
+    out.append("| target | measured | status |")
+    out.append("|---|---|---|")
+    out += t
+    return "\n".join(out) + "\n"
+
+
+STYLE = {"nbs-auto": ("C0", "o"), "nbs-nbs": ("C1", "s"), "nbs-sorting": ("C2", "^"),
+         "nbs-screening": ("C3", "v"), "nbs-direct": ("C7", "x"), "nanoflann": ("C4", "D"),
+         "cgal": ("C5", "P"), "scipy": ("C6", "*"), "lammps": ("k", "h"),
+         "lammps-nosort": ("C8", "<")}
+
+
+def plots(rows, out):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ok = [r for r in rows if r["status"] == "ok"]
+    tools = [t for t in STYLE if any(r["tool"] == t for r in ok)]
+
+    def series(tool, dim, scene, order, x="N", y="ns_per_element"):
+        pts = sorted((float(r[x]), float(r[y]), int(r["N"])) for r in ok if r["tool"] == tool
+                     and r["dim"] == str(dim) and r["scene"] == scene and r["order"] == order)
+        return pts
+
+    made = []
+    # 1. ns per element against N.
+    fig, axes = plt.subplots(1, 2, figsize=(13, 5.2))
+    for ax, dim in zip(axes, (3, 2)):
+        for t in tools:
+            c, m = STYLE[t]
+            for order, ls in (("random", "-"), ("sorted", ":")):
+                p = series(t, dim, "uniform", order)
+                if p:
+                    ax.plot([q[0] for q in p], [q[1] for q in p], ls, color=c, marker=m,
+                            label=f"{t}" if order == "random" else None, ms=5)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("N (elements)")
+        ax.set_ylabel("ns per element per detection")
+        ax.set_title(f"{dim}D uniform, fraction 0.5 (solid: random order, dotted: sorted)")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "ns_per_element.png"), dpi=110)
+    plt.close(fig)
+    made.append("ns_per_element.png")
+
+    # 2. time against spacing (the book's Figs. 3.49-3.53).
+    if any(r["scene"] == "density" for r in ok):
+        fig, axes = plt.subplots(1, 2, figsize=(13, 5.2))
+        for ax, dim in zip(axes, (3, 2)):
+            ns = ""
+            for t in tools:
+                c, m = STYLE[t]
+                p = series(t, dim, "density", "random", x="spacing", y="seconds")
+                if p:
+                    ax.plot([q[0] for q in p], [q[1] for q in p], "-", color=c, marker=m,
+                            label=t, ms=5)
+                    ns = fmt_n(p[0][2])
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.set_xlabel("mean spacing S/D (density (D/S)^dim)")
+            ax.set_ylabel("seconds per detection")
+            ax.set_title(f"{dim}D, N = {ns}, uniform random: time vs packing density")
+            ax.grid(True, which="both", alpha=0.3)
+        axes[0].legend(fontsize=8)
+        fig.tight_layout()
+        fig.savefig(os.path.join(out, "density.png"), dpi=110)
+        plt.close(fig)
+        made.append("density.png")
+
+    # 3. memory per element.
+    fig, axes = plt.subplots(1, 2, figsize=(13, 5.2))
+    for ax, dim in zip(axes, (3, 2)):
+        for t in tools:
+            c, m = STYLE[t]
+            p = sorted((int(r["N"]), float(r["peak_bytes"]) / int(r["N"])) for r in ok
+                       if r["tool"] == t and r["dim"] == str(dim) and r["scene"] == "uniform"
+                       and r["order"] == "random" and r["peak_bytes"] not in ("", "0"))
+            if p:
+                ax.plot([q[0] for q in p], [q[1] for q in p], "-", color=c, marker=m, label=t,
+                        ms=5)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("N (elements)")
+        ax.set_ylabel("peak bytes per element")
+        ax.set_title(f"{dim}D uniform: nbs: library peak; LAMMPS: its own count;\n"
+                     "others: peak RSS above the loaded coordinates", fontsize=9)
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "memory_per_element.png"), dpi=110)
+    plt.close(fig)
+    made.append("memory_per_element.png")
+
+    # 4. scenes at the largest N that has all of them.
+    scenes = ["uniform", "sparse", "clustered", "huge"]
+    fig, axes = plt.subplots(1, 2, figsize=(13, 5.2))
+    for ax, dim in zip(axes, (3, 2)):
+        ns = [int(r["N"]) for r in ok if r["dim"] == str(dim) and r["scene"] == "huge"
+              and r["tool"] == "nbs-auto"]
+        if not ns:
+            continue
+        n = max(ns)
+        width = 0.8 / max(1, len(tools))
+        for k, t in enumerate(tools):
+            vals = []
+            for s in scenes:
+                r = find(ok, tool=t, dim=dim, scene=s, N=n, order="random")
+                vals.append(nsel(r) if r else 0)
+            if any(vals):
+                ax.bar([i + k * width for i in range(len(scenes))], vals, width,
+                       color=STYLE[t][0], label=t)
+        ax.set_xticks([i + 0.4 - width / 2 for i in range(len(scenes))], scenes)
+        ax.set_yscale("log")
+        ax.set_ylabel("ns per element per detection")
+        ax.set_title(f"{dim}D, N = {fmt_n(n)}, random order: the scene's effect")
+        ax.grid(True, axis="y", which="both", alpha=0.3)
+    axes[0].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "scenes.png"), dpi=110)
+    plt.close(fig)
+    made.append("scenes.png")
+    return made
+
+
+def main(argv):
+    ap = argparse.ArgumentParser(prog="bench/run", description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--smoke", action="store_true",
+                    help="tiny N, every scene and tool; exit 1 on any disagreement or failure")
+    ap.add_argument("--build", default=os.path.join(ROOT, "build-bench"))
+    ap.add_argument("--n", default="1e3,1e4,1e5,1e6,1e7", help="element counts")
+    ap.add_argument("--dims", default="3,2")
+    ap.add_argument("--scenes", default="uniform,sparse,clustered,huge")
+    ap.add_argument("--orders", default="random,sorted")
+    ap.add_argument("--tools", default=",".join(ALL_TOOLS),
+                    help="nbs and any of " + ",".join(PEERS))
+    ap.add_argument("--algorithms", default="auto,nbs,sorting,screening,direct",
+                    help="nbs algorithms (direct only for N <= --direct-max)")
+    ap.add_argument("--fraction", type=float, default=0.5, help="uniform scenes")
+    ap.add_argument("--sparse-fraction", type=float, default=0.005)
+    ap.add_argument("--other-max-n", type=float, default=1e6,
+                    help="largest N of the sparse, clustered and huge scenes")
+    ap.add_argument("--peer-max-n", type=float, default=1e6,
+                    help="largest N at which the peers run (nbs runs at every N)")
+    ap.add_argument("--peer-max-n-other", type=float, default=1e5,
+                    help="largest N at which the peers run on sparse/clustered/huge")
+    ap.add_argument("--nosort-max-n", type=float, default=1e6,
+                    help="largest N for lammps-nosort")
+    ap.add_argument("--lammps-max-bins", type=float, default=2e8)
+    ap.add_argument("--sweep-n", type=float, default=1e5,
+                    help="N of the density sweep (0: no sweep)")
+    ap.add_argument("--spacings", default="1,2,5,10,20,50,100,200", help="S/D of the sweep")
+    ap.add_argument("--direct-max", type=float, default=2e4)
+    ap.add_argument("--repeats", type=int, default=5, help="nbs detections per algorithm")
+    ap.add_argument("--min-time", type=float, default=0.2,
+                    help="nbs repeats at least this many seconds per algorithm")
+    ap.add_argument("--peer-repeats", type=int, default=3)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--timeout", type=float, default=3600, help="seconds per tool run")
+    ap.add_argument("--machine", default=None, help="results/<machine> (default: from the CPU)")
+    ap.add_argument("--out", default=None, help="results directory (overrides --machine)")
+    ap.add_argument("--workdir", default=None, help="scene files (default: a temporary dir)")
+    ap.add_argument("--fresh", action="store_true",
+                    help="start a new results.csv (default: replace only the cases run now)")
+    ap.add_argument("--no-plots", action="store_true")
+    ap.add_argument("--keep-files", action="store_true")
+    ap.add_argument("--head-n", type=float, default=1e6, help="N of the headline table")
+    ap.add_argument("-v", "--verbose", action="store_true")
+    a = ap.parse_args(argv)
+    a.argv = argv
+    if a.smoke:
+        a.n, a.sweep_n, a.spacings = "1000", 2000, "1,10,200"
+        a.repeats, a.peer_repeats, a.min_time = 2, 1, 0.0
+        a.nosort_max_n = 1000
+    a.n = number_list(a.n, int)
+    a.dims = number_list(a.dims, int)
+    a.scenes = [s for s in a.scenes.split(",") if s]
+    a.orders = [s for s in a.orders.split(",") if s]
+    a.tools = [s for s in a.tools.split(",") if s]
+    a.algorithms = [s for s in a.algorithms.split(",") if s]
+    a.spacings = number_list(a.spacings, lambda x: int(x) if x == int(x) else x)
+    a.sweep_n = int(a.sweep_n)
+    for k in ("other_max_n", "peer_max_n", "peer_max_n_other", "nosort_max_n", "direct_max",
+              "head_n"):
+        setattr(a, k, int(getattr(a, k)))
+    bad = [t for t in a.tools if t not in ALL_TOOLS]
+    if bad:
+        ap.error(f"unknown tools {bad}")
+    if a.out is None:
+        a.out = (tempfile.mkdtemp(prefix="nbs-bench-smoke-") if a.smoke else
+                 os.path.join(HERE, "results", a.machine or machine_name()))
+    os.makedirs(a.out, exist_ok=True)
+    own_workdir = a.workdir is None
+    if own_workdir:
+        a.workdir = tempfile.mkdtemp(prefix="nbs-bench-scenes-")
+    os.makedirs(a.workdir, exist_ok=True)
+
+    started = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC")
+    load_start = open("/proc/loadavg").read().strip()
+    t0 = time.time()
+    suite = Suite(a)
+    try:
+        for c in plan(a):
+            suite.case(*c)
+    finally:
+        if own_workdir:
+            shutil.rmtree(a.workdir, ignore_errors=True)
+
+    csv_path = os.path.join(a.out, "results.csv")
+    rows = suite.rows
+    if not a.fresh and not a.smoke:
+        now = {key_of(r) for r in rows}
+        rows = [r for r in load_rows(csv_path) if key_of(r) not in now] + rows
+        rows.sort(key=lambda r: (r["scene"] == "density", r["scene"], -int(r["dim"]), r["order"],
+                                 int(r["N"]), float(r["spacing"] or 0)))
+    write_rows(csv_path, rows)
+    rows = load_rows(csv_path)
+    with open(os.path.join(a.out, "machine.txt"), "w") as f:
+        f.write(describe_machine(a, started, load_start))
+    with open(os.path.join(a.out, "summary.md"), "w") as f:
+        f.write(f"Measured {started} on {os.path.basename(a.out)} "
+                f"(machine.txt); regenerate with bench/run.\n\n")
+        f.write(summary(rows, a.head_n))
+    made = [] if a.no_plots else plots(rows, a.out)
+    log(f"\nwrote {csv_path}, summary.md, machine.txt" +
+        (", " + ", ".join(made) if made else "") + f"  ({time.time() - t0:.0f} s)")
+    n_ok = sum(1 for r in suite.rows if r["status"] == "ok")
+    if suite.failures:
+        log("\n" + "!" * 78)
+        log(f"!!! {len(suite.failures)} FAILURE(S): tools disagree on pair counts or failed:")
+        for x in suite.failures:
+            log(f"!!!   {x}")
+        log("!" * 78)
+        log(f"bench: {n_ok} passed, {len(suite.failures)} failed")
+        return 1
+    log(f"all tools agree on every case")
+    log(f"bench: {n_ok} passed, 0 failed")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
