@@ -7,6 +7,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#if defined(_OPENMP)
+#include <omp.h>
+#endif
+
 const char *nbs_version(void) { return NBS_VERSION_STRING; }
 
 const char *nbs_status_name(nbs_status status) {
@@ -44,6 +48,7 @@ static const nbs__algorithm_entry nbs__algorithms[NBS_ALGORITHM_COUNT] = {
     [NBS_SCREENING] = {"screening", nbs__screening},
     [NBS_SORTING] = {"sorting", nbs__sorting},
     [NBS_NBS] = {"nbs", nbs__nbs},
+    [NBS_CELLSORT] = {"cellsort", nbs__cellsort},
 };
 
 const char *nbs_algorithm_name(nbs_algorithm algorithm) {
@@ -92,20 +97,69 @@ static void nbs__default_free(void *opaque, void *p, size_t size) {
   free(p);
 }
 
+/* Threads of one detection may allocate at the same time (their pair lists): the user's
+ * allocator and the byte count see one call at a time. */
 void *nbs__alloc(nbs_context *ctx, size_t size) {
   if (size == 0) size = 1;
-  void *p = ctx->allocator.alloc(ctx->allocator.opaque, size);
-  if (!p) return NULL;
-  ctx->bytes += size;
-  if (ctx->bytes > ctx->peak_bytes) ctx->peak_bytes = ctx->bytes;
+  void *p;
+#if defined(_OPENMP)
+#pragma omp critical(nbs__allocator)
+#endif
+  {
+    p = ctx->allocator.alloc(ctx->allocator.opaque, size);
+    if (p) {
+      ctx->bytes += size;
+      if (ctx->bytes > ctx->peak_bytes) ctx->peak_bytes = ctx->bytes;
+    }
+  }
   return p;
 }
 
 void nbs__free(nbs_context *ctx, void *p, size_t size) {
   if (!p) return;
   if (size == 0) size = 1;
-  ctx->allocator.free(ctx->allocator.opaque, p, size);
-  ctx->bytes -= size;
+#if defined(_OPENMP)
+#pragma omp critical(nbs__allocator)
+#endif
+  {
+    ctx->allocator.free(ctx->allocator.opaque, p, size);
+    ctx->bytes -= size;
+  }
+}
+
+nbs_status nbs__thread_pairs_grow(nbs_context *ctx, int t, size_t need, nbs_pair **buf,
+                                  size_t *cap) {
+  if (need <= ctx->tcap[t]) {
+    *buf = ctx->tpairs[t];
+    *cap = ctx->tcap[t];
+    return NBS_OK;
+  }
+  size_t c = ctx->tcap[t] + ctx->tcap[t] / 2;
+  if (c < need) c = need;
+  if (c < 4096) c = 4096;
+  if (c > SIZE_MAX / sizeof(nbs_pair)) return NBS_ERR_NOMEM;
+  nbs_pair *p = nbs__alloc(ctx, c * sizeof(nbs_pair));
+  if (!p) return NBS_ERR_NOMEM;
+  if (*buf && need > 0) memcpy(p, ctx->tpairs[t], ctx->tcap[t] * sizeof(nbs_pair));
+  nbs__free(ctx, ctx->tpairs[t], ctx->tcap[t] * sizeof(nbs_pair));
+  ctx->tpairs[t] = p;
+  ctx->tcap[t] = c;
+  *buf = p;
+  *cap = c;
+  return NBS_OK;
+}
+
+int nbs__threads(const nbs_context *ctx, int64_t useful) {
+#if defined(_OPENMP)
+  int t = ctx->threads > 0 ? ctx->threads : omp_get_max_threads();
+  if (t > NBS__THREADS_MAX) t = NBS__THREADS_MAX;
+  if (t > useful) t = (int)useful;
+  return t < 1 ? 1 : t;
+#else
+  (void)ctx;
+  (void)useful;
+  return 1;
+#endif
 }
 
 nbs_status nbs__work_reserve(nbs_context *ctx, size_t bytes) {
@@ -173,6 +227,7 @@ nbs_status nbs_context_create(const nbs_context_def *def, nbs_context **out) {
   *out = NULL;
   nbs_context_def d = def ? *def : nbs_default_context_def();
   if ((d.allocator.alloc == NULL) != (d.allocator.free == NULL)) return NBS_ERR_ARGUMENT;
+  if (d.threads < 0) return NBS_ERR_ARGUMENT;
   if (!d.allocator.alloc) {
     d.allocator.alloc = nbs__default_alloc;
     d.allocator.free = nbs__default_free;
@@ -184,6 +239,7 @@ nbs_status nbs_context_create(const nbs_context_def *def, nbs_context **out) {
   ctx->allocator = d.allocator;
   ctx->cell_budget = d.cell_budget;
   ctx->max_pairs = d.max_pairs;
+  ctx->threads = d.threads;
   ctx->bytes = ctx->peak_bytes = sizeof *ctx;
   ctx->error_element = -1;
   *out = ctx;
@@ -194,6 +250,9 @@ void nbs_context_destroy(nbs_context *ctx) {
   if (!ctx) return;
   nbs__free(ctx, ctx->work, ctx->work_size);
   nbs__free(ctx, ctx->pairs, ctx->pairs_cap * sizeof(nbs_pair));
+  for (int t = 0; t < NBS__THREADS_MAX; t++) {
+    nbs__free(ctx, ctx->tpairs[t], ctx->tcap[t] * sizeof(nbs_pair));
+  }
   nbs_allocator a = ctx->allocator;
   a.free(a.opaque, ctx, sizeof *ctx);
 }
@@ -235,6 +294,26 @@ nbs_status nbs__flush(nbs__run *run) {
   }
   ctx->pairs_count = run->count;
   NBS__TRY(nbs__pairs_grow(ctx, run->count + 1));
+  run->buf = ctx->pairs;
+  run->cap = ctx->pairs_cap;
+  return NBS_OK;
+}
+
+nbs_status nbs__room(nbs__run *run, size_t need, bool *room) {
+  *room = true;
+  if (run->cap - run->count >= need) return NBS_OK;
+  if (run->callback) {
+    if (run->count > 0) NBS__TRY(nbs__flush(run));
+    *room = run->cap >= need;
+    return NBS_OK;
+  }
+  nbs_context *ctx = run->ctx;
+  if (ctx->max_pairs && run->count + need > ctx->max_pairs) {
+    *room = false; /* the pair-by-pair path will stop at the limit with NBS_ERR_PAIRS */
+    return NBS_OK;
+  }
+  ctx->pairs_count = run->count;
+  NBS__TRY(nbs__pairs_grow(ctx, run->count + need));
   run->buf = ctx->pairs;
   run->cap = ctx->pairs_cap;
   return NBS_OK;

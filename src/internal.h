@@ -59,6 +59,8 @@ static inline int32_t nbs__cell(const nbs__grid *g, const double *x, int axis) {
   return (int32_t)((x[axis] - g->lo[axis]) * g->inv_edge);
 }
 
+#define NBS__THREADS_MAX 64
+
 struct nbs_context {
   nbs_allocator allocator;
   size_t cell_budget;
@@ -79,6 +81,12 @@ struct nbs_context {
   nbs_pair *pairs;
   size_t pairs_cap, pairs_count;
   bool pairs_valid;
+
+  /* Threads (cellsort): the number asked for (0: OpenMP's default), and each extra
+   * thread's pair list, kept between detections. */
+  int threads;
+  nbs_pair *tpairs[NBS__THREADS_MAX];
+  size_t tcap[NBS__THREADS_MAX];
 
   nbs_stats stats;
   char error[256];
@@ -116,6 +124,12 @@ void nbs__free(nbs_context *ctx, void *p, size_t size);
  * lost and work_kind becomes 0; on failure the old block is kept (NBS_ERR_NOMEM). */
 nbs_status nbs__work_reserve(nbs_context *ctx, size_t bytes);
 
+/* Grows thread t's pair list to at least `need` pairs (thread-safe); *buf and *cap follow. */
+nbs_status nbs__thread_pairs_grow(nbs_context *ctx, int t, size_t need, nbs_pair **buf,
+                                  size_t *cap);
+/* How many threads to use for work that can use at most `useful` (>= 1 always). */
+int nbs__threads(const nbs_context *ctx, int64_t useful);
+
 /* ---- errors (context.c) ---- */
 /* Records status with a formatted detail (element -1 when none) and returns status. */
 nbs_status nbs__fail(nbs_context *ctx, nbs_status status, int64_t element, const char *fmt, ...)
@@ -136,6 +150,11 @@ nbs_status nbs__prepare(nbs__run *run, const nbs_input *in);
 /* ---- pair sink (context.c) ---- */
 /* Called when the batch is full: delivers it to the callback, or grows the buffer. */
 nbs_status nbs__flush(nbs__run *run);
+
+/* Makes room for `need` more pairs (flushing a callback's batch or growing the buffer), so
+ * that a fast loop can write them without checks. *room is false when that cannot be (a
+ * batch smaller than need, or max_pairs in reach): then emit pair by pair. */
+nbs_status nbs__room(nbs__run *run, size_t need, bool *room);
 
 static inline nbs_status nbs__emit(nbs__run *run, int32_t a, int32_t b) {
   if (run->count == run->cap) {
@@ -183,9 +202,11 @@ nbs_status nbs__direct(nbs__run *run);
 nbs_status nbs__screening(nbs__run *run);
 nbs_status nbs__sorting(nbs__run *run);
 nbs_status nbs__nbs(nbs__run *run);
+nbs_status nbs__cellsort(nbs__run *run);
 
 /* Work-block layouts, for work_kind. */
-enum { NBS__WORK_NONE = 0, NBS__WORK_SCREENING = 1, NBS__WORK_SORTING = 2, NBS__WORK_NBS = 3 };
+enum { NBS__WORK_NONE = 0, NBS__WORK_SCREENING = 1, NBS__WORK_SORTING = 2, NBS__WORK_NBS = 3,
+       NBS__WORK_CELLSORT = 4 };
 
 /* ---- test hooks (not part of the API; used by tests/ against the static library) ---- */
 /* True when every list head in the context's NBS / screening layout is empty (or when the

@@ -35,7 +35,10 @@
  *   [ C: nz+2 ] [ B0: ny+2 ] [ B1: ny+2 ] [ A0: nx+2 ] [ A1: nx+2 ] [ Z: N ] [ Y: N ] [ X: N ]
  * in 3D, and in 2D
  *   [ B: ny+2 ] [ A0: nx+2 ] [ A1: nx+2 ] [ Y: N ] [ X: N ]
- * where nx, ny, nz, N are the capacities ctx->work_cap[0], [1], [2], [3]. work_cap[2] is 0
+ * that is 4 (3N + nz + 2ny + 2nx + 10) bytes in 3D and 4 (2N + ny + 2nx + 6) in 2D: eqs. 3.80
+ * and 3.65 plus the padding. nx, ny, nz, N here are the capacities ctx->work_cap[0], [1], [2],
+ * [3]: exactly the grid and N of the first detection, grown later only when a detection needs
+ * more (axes then get 1/8 slack, within the cell budget). work_cap[2] is 0
  * for the 2D layout (a 3D grid always has nz >= 1), which is how the dimension is encoded.
  * All heads are contiguous at the start, and between detections every head is NBS__EMPTY
  * (the book's step 0, done once when the layout is created); the next arrays need no
@@ -48,14 +51,12 @@
 /* ---- the work-block layout ----------------------------------------------------------- */
 
 typedef struct nbs__nbs_layout {
-  int dim;
-  int64_t heads; /* number of int32 heads, all at the start of the block */
-  size_t bytes;  /* heads and next arrays */
-  int32_t *C;    /* z-list heads (3D only) */
-  int32_t *B0;   /* y-list heads; in 2D the only set */
-  int32_t *B1;   /* y-list heads of the layer below the central one (3D only) */
-  int32_t *A0;   /* x-list heads of the central row */
-  int32_t *A1;   /* x-list heads of the neighbouring rows */
+  size_t bytes;       /* heads and next arrays */
+  int32_t *C;         /* z-list heads (3D only) */
+  int32_t *B0;        /* y-list heads; in 2D the only set */
+  int32_t *B1;        /* y-list heads of the layer below the central one (3D only) */
+  int32_t *A0;        /* x-list heads of the central row */
+  int32_t *A1;        /* x-list heads of the neighbouring rows */
   int32_t *Z, *Y, *X; /* next arrays (Z in 3D only) */
 } nbs__nbs_layout;
 
@@ -80,8 +81,6 @@ static uint64_t nbs__nbs_layout_bytes(int dim, const int64_t cap[4]) {
 /* Points the arrays of *L into `work`, laid out for dimension dim and capacities cap[]. */
 static void nbs__nbs_layout_at(nbs__nbs_layout *L, void *work, int dim, const int64_t cap[4]) {
   int32_t *w = work;
-  L->dim = dim;
-  L->heads = nbs__nbs_head_count(dim, cap);
   L->bytes = (size_t)nbs__nbs_layout_bytes(dim, cap);
   if (dim == 3) {
     L->C = w;
@@ -227,8 +226,12 @@ static nbs_status nbs__nbs_2d(nbs__run *run, const nbs__nbs_layout *L) {
     }
 
     /* Removal of the x-lists: reset only the heads the two rows touched. */
-    for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) A0[nbs__nbs_cell(g, x, 2, e, 0)] = NBS__EMPTY;
-    for (int32_t e = below; e != NBS__EMPTY; e = Y[e]) A1[nbs__nbs_cell(g, x, 2, e, 0)] = NBS__EMPTY;
+    for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) {
+      A0[nbs__nbs_cell(g, x, 2, e, 0)] = NBS__EMPTY;
+    }
+    for (int32_t e = below; e != NBS__EMPTY; e = Y[e]) {
+      A1[nbs__nbs_cell(g, x, 2, e, 0)] = NBS__EMPTY;
+    }
   }
 
   /* Removal of the y-lists, by a loop over the elements (eqs. 3.36-3.37 for rows). */
@@ -238,7 +241,7 @@ static nbs_status nbs__nbs_2d(nbs__run *run, const nbs__nbs_layout *L) {
 
 /* ---- 3D (section 3.10; the numbered steps are those of the pseudocode on p. 127) ----- */
 
-/* Pushes the elements of the y-list starting at e onto the x-lists A (set 1). */
+/* Pushes the elements of the y-list starting at `first` onto the x-lists of the set A. */
 #define NBS__NBS_PUSH_ROW(first, A)                                                           \
   for (int32_t e = (first); e != NBS__EMPTY; e = Y[e]) {                                      \
     int32_t ix = nbs__nbs_cell(g, x, 3, e, 0);                                                \
@@ -246,9 +249,11 @@ static nbs_status nbs__nbs_2d(nbs__run *run, const nbs__nbs_layout *L) {
     (A)[ix] = e;                                                                              \
   }
 
-/* Removes the x-lists of A that the elements of the y-list starting at e built. */
+/* Removes the x-lists of the set A that the elements of the y-list `first` built. */
 #define NBS__NBS_CLEAR_ROW(first, A)                                                          \
-  for (int32_t e = (first); e != NBS__EMPTY; e = Y[e]) (A)[nbs__nbs_cell(g, x, 3, e, 0)] = NBS__EMPTY;
+  for (int32_t e = (first); e != NBS__EMPTY; e = Y[e]) {                                      \
+    (A)[nbs__nbs_cell(g, x, 3, e, 0)] = NBS__EMPTY;                                           \
+  }
 
 static nbs_status nbs__nbs_3d(nbs__run *run, const nbs__nbs_layout *L) {
   const nbs__grid *g = &run->grid;
@@ -332,8 +337,12 @@ static nbs_status nbs__nbs_3d(nbs__run *run, const nbs__nbs_layout *L) {
     }
 
     /* Step 11: remove the y-lists of the central layer and of layer iz-1. */
-    for (int32_t e = layer; e != NBS__EMPTY; e = Z[e]) B0[nbs__nbs_cell(g, x, 3, e, 1)] = NBS__EMPTY;
-    for (int32_t e = under; e != NBS__EMPTY; e = Z[e]) B1[nbs__nbs_cell(g, x, 3, e, 1)] = NBS__EMPTY;
+    for (int32_t e = layer; e != NBS__EMPTY; e = Z[e]) {
+      B0[nbs__nbs_cell(g, x, 3, e, 1)] = NBS__EMPTY;
+    }
+    for (int32_t e = under; e != NBS__EMPTY; e = Z[e]) {
+      B1[nbs__nbs_cell(g, x, 3, e, 1)] = NBS__EMPTY;
+    }
   }
 
   /* Finally remove the z-lists, by a loop over the elements. */
@@ -368,8 +377,8 @@ nbs_status nbs__nbs(nbs__run *run) {
 
   if (!g->fits) {
     return nbs__fail(ctx, NBS_ERR_EXTENT, -1,
-                     "nbs: the grid needs more than %lld cells on an axis (x %lld, y %lld%s%lld "
-                     "cells; -1: overflow); use 'auto' or 'sorting'",
+                     "nbs: the grid needs more than %lld cells on an axis (cells per axis: x "
+                     "%lld, y %lld%s%lld; -1 means too many); use 'auto' or 'sorting'",
                      (long long)NBS__AXIS_MAX, (long long)g->n[0], (long long)g->n[1],
                      dim == 3 ? ", z " : "", dim == 3 ? (long long)g->n[2] : 0LL);
   }

@@ -39,13 +39,15 @@ static const case_def cases[] = {
     {"n = 2 apart", SCENE_IDENTICAL, 2, 0.5, 0.0, 1.0},
 };
 
-static const nbs_algorithm algorithms[] = {NBS_AUTO, NBS_SCREENING, NBS_SORTING, NBS_NBS};
+static const nbs_algorithm algorithms[] = {NBS_AUTO, NBS_SCREENING, NBS_SORTING, NBS_NBS,
+                                           NBS_CELLSORT};
 
 /* An algorithm may refuse a scene only for its documented reasons: screening's cell array
  * over budget, or a grid too wide to index for screening and NBS. */
 static bool may_refuse(nbs_algorithm a, nbs_status s) {
   return (a == NBS_SCREENING && (s == NBS_ERR_BUDGET || s == NBS_ERR_EXTENT)) ||
-         (a == NBS_NBS && (s == NBS_ERR_BUDGET || s == NBS_ERR_EXTENT));
+         (a == NBS_NBS && (s == NBS_ERR_BUDGET || s == NBS_ERR_EXTENT)) ||
+         (a == NBS_CELLSORT && s == NBS_ERR_EXTENT);
 }
 
 static bool well_formed(const pair_list *l, int64_t n) {

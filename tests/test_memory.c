@@ -100,7 +100,8 @@ static void test_screening_cells(void) {
 
 /* After the first detection, the same or a smaller N allocates nothing. */
 static void test_no_allocation_after_first(void) {
-  const nbs_algorithm algos[] = {NBS_AUTO, NBS_DIRECT, NBS_SCREENING, NBS_SORTING, NBS_NBS};
+  const nbs_algorithm algos[] = {NBS_AUTO,    NBS_DIRECT, NBS_SCREENING,
+                                 NBS_SORTING, NBS_NBS,    NBS_CELLSORT};
   for (int dim = 2; dim <= 3; dim++) {
     scene s = make_scene(SCENE_UNIFORM, dim, 6000, 0.5);
     for (size_t a = 0; a < sizeof algos / sizeof *algos; a++) {

@@ -94,10 +94,11 @@ typedef enum nbs_algorithm {
   NBS_SCREENING = 2, /* direct mapping onto a cell array, O(N) time, O(cells) memory */
   NBS_SORTING = 3,   /* cells sorted by the book's midpoint sort, O(N log N), 3N/4N ints */
   NBS_NBS = 4,       /* Munjiza-NBS, O(N) time, O(N + nx + ny + nz) memory */
+  NBS_CELLSORT = 5,  /* beyond the book: radix-sorted cells, cache-friendly, O(N) memory */
   NBS_ALGORITHM_COUNT
 } nbs_algorithm;
 
-/* "auto", "direct", "screening", "sorting", "nbs"; NULL for a value out of range. */
+/* "auto", "direct", "screening", "sorting", "nbs", "cellsort"; NULL for a value out of range. */
 NBS_API const char *nbs_algorithm_name(nbs_algorithm algorithm);
 /* Parses one of the names above. NBS_ERR_NULL, NBS_ERR_ALGORITHM. */
 NBS_API nbs_status nbs_algorithm_from_name(const char *name, nbs_algorithm *out);
@@ -130,6 +131,10 @@ typedef struct nbs_context_def {
    * more returns NBS_ERR_PAIRS (with the count so far in nbs_last_stats). 0 means no
    * limit beyond allocation failure. Default 0. */
   size_t max_pairs;
+  /* Threads for the algorithms that use them (cellsort, and so auto): 0 (the default) for
+   * OpenMP's default (OMP_NUM_THREADS, or the cores), 1 for none. The pairs are the same,
+   * in the same order, for any number. Ignored when the library is built without OpenMP. */
+  int threads;
 } nbs_context_def;
 
 #define NBS_DEFAULT_CELL_BUDGET ((size_t)1 << 30)
@@ -139,7 +144,8 @@ NBS_API nbs_context_def nbs_default_context_def(void);
 typedef struct nbs_context nbs_context;
 
 /* Creates a context. def may be NULL for the defaults. On failure *out is NULL.
- * NBS_ERR_NULL (out), NBS_ERR_ARGUMENT (only one allocator function set), NBS_ERR_NOMEM. */
+ * NBS_ERR_NULL (out), NBS_ERR_ARGUMENT (only one allocator function set, or threads < 0),
+ * NBS_ERR_NOMEM. */
 NBS_API nbs_status nbs_context_create(const nbs_context_def *def, nbs_context **out);
 /* Frees everything the context holds. NULL is allowed. */
 NBS_API void nbs_context_destroy(nbs_context *ctx);
