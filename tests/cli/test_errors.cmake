@@ -1,0 +1,84 @@
+# Bad input: each file of data/bad gives its FILE:LINE:COLUMN: message and exit code 3;
+# bad command lines give exit code 2; no output file is left behind.
+cmake_minimum_required(VERSION 3.25)
+include(${CMAKE_CURRENT_LIST_DIR}/common.cmake)
+set(B ${DATA}/bad)
+set(OUT ${WORK}/pairs.csv)
+
+function(bad name code err)
+  expect(NAME "${name}" CODE ${code} ERR "${err}" ARGS ${ARGN})
+  expect_no_file("${name}: no output" ${OUT})
+  set(NBS_CHECKS ${NBS_CHECKS} PARENT_SCOPE)
+endfunction()
+
+# Malformed CSV.
+bad(nonnumber 3 "nonnumber.csv:2:3: 'x1' is not a number\n"
+    detect --input ${B}/nonnumber.csv --dim 2 --output ${OUT})
+bad(columns 3 "columns.csv:2:4: 2 values, expected 3 as on line 1\n"
+    detect --input ${B}/columns.csv --dim 2 --output ${OUT})
+bad(fivecols 3 "fivecols.csv:1:1: 5 values: expected 2 \\(x,y\\) with --diameter, or 3 \\(x,y,radius\\)\n"
+    detect --input ${B}/fivecols.csv --dim 2 --output ${OUT})
+bad(twocols_3d 3 "twocols.csv:1:1: 2 values: expected 3 \\(x,y,z\\) with --diameter, or 4 \\(x,y,z,radius\\)\n"
+    detect --input ${B}/twocols.csv --dim 3 --output ${OUT})
+bad(no_radius 3 "twocols.csv:1:1: 2 values: no radius column .* and no --diameter\n"
+    detect --input ${B}/twocols.csv --dim 2 --output ${OUT})
+bad(headercount 3 "headercount.csv:2:1: 3 values, but the header on line 1 names 4 columns\n"
+    detect --input ${B}/headercount.csv --dim 3 --output ${OUT})
+bad(nan 3 "nan.csv:2:3: y is NaN\n" detect --input ${B}/nan.csv --dim 2 --output ${OUT})
+bad(inf 3 "inf.csv:1:1: x is infinite\n" detect --input ${B}/inf.csv --dim 2 --output ${OUT})
+bad(negradius 3 "negradius.csv:2:5: radius -0.5 is negative\n"
+    detect --input ${B}/negradius.csv --dim 2 --output ${OUT})
+bad(zeroradius 3 "zeroradius.csv:1:5: radius is 0: it must be > 0\n"
+    detect --input ${B}/zeroradius.csv --dim 2 --output ${OUT})
+bad(empty 3 "empty.csv:1:1: empty file: no elements\n"
+    detect --input ${B}/empty.csv --dim 2 --output ${OUT})
+bad(headeronly 3 "headeronly.csv:1:1: no elements \\(no data lines\\)\n"
+    detect --input ${B}/headeronly.csv --dim 2 --output ${OUT})
+bad(nul 3 "nul.csv:2:2: a NUL byte: this is not a text file"
+    detect --input ${B}/nul.csv --format csv --dim 2 --output ${OUT})
+
+# Malformed raw f64.
+bad(truncated_f64 3 "truncated.f64:5:4: truncated: 156 bytes are not a whole number of elements of 4 doubles \\(32 bytes\\); element 5, at byte 128, has only 28 bytes\n"
+    detect --input ${B}/truncated.f64 --dim 3 --output ${OUT})
+bad(nan_f64 3 "nan.f64:2:2: y is NaN \\(element 2, byte 40\\)\n"
+    detect --input ${B}/nan.f64 --dim 3 --output ${OUT})
+bad(negradius_f64 3 "negradius.f64:2:4: radius -2 is negative \\(element 2, byte 56\\)\n"
+    detect --input ${B}/negradius.f64 --dim 3 --output ${OUT})
+bad(empty_f64 3 "empty.f64:1:1: empty file: no elements\n"
+    detect --input ${B}/empty.f64 --dim 3 --output ${OUT})
+bad(f64_needs_dim 2 "a raw f64 file needs --dim 2 or 3"
+    detect --input ${B}/nan.f64 --output ${OUT})
+
+# Files that cannot be read.
+bad(missing 3 "no-such-file.csv: cannot open: No such file or directory\n"
+    detect --input ${WORK}/no-such-file.csv --dim 2 --output ${OUT})
+bad(directory 3 ": is a directory\n" detect --input ${B} --dim 2 --output ${OUT})
+
+# Bad command lines: exit 2 and a hint.
+bad(dim4 2 "nbs detect: --dim 4: the dimension must be 2 or 3\nTry 'nbs detect --help'.\n"
+    detect --input ${B}/nan.csv --dim 4 --output ${OUT})
+bad(dim_missing 2 "--dim : the dimension must be 2 or 3" detect --input ${B}/nan.csv --dim)
+bad(algorithm 2 "nbs detect: unknown algorithm 'fastest': use direct, screening, sorting, nbs or auto\n"
+    detect --input ${B}/nan.csv --dim 2 --algorithm fastest --output ${OUT})
+bad(no_input 2 "nbs detect: no input: give --input FILE\n" detect --dim 2 --output ${OUT})
+bad(repeat0 2 "--repeat 0: give a count from 1 to 1000000" detect --input ${B}/nan.csv --dim 2 --repeat 0)
+bad(diameter 2 "--diameter -1: it must be a finite number > 0" detect --input ${B}/nan.csv --dim 2 --diameter -1)
+bad(unknown_option 2 "nbs detect: unknown option '--fast'" detect --input ${B}/nan.csv --fast)
+bad(unknown_command 2 "nbs: unknown command 'detcet'" detcet --input ${B}/nan.csv)
+bad(csv_needs_dim 2 "give --dim 2 or 3 \\(the file has no header naming x, y, z\\)"
+    detect --input ${B}/columns.csv)
+
+# A write that fails leaves nothing behind, and says why (exit 4).
+bad(unwritable 4 "no-such-dir/pairs.csv: cannot create: No such file or directory"
+    detect --input ${DATA}/golden/circles2d.csv --dim 2 --output ${WORK}/no-such-dir/pairs.csv)
+
+# A library error: screening over its cell budget (exit 4, the library's message).
+bad(budget 4 "screening needs [0-9]+ bytes of cell heads .*over the budget of 1000 bytes \\(budget\\)"
+    detect --input ${DATA}/golden/spheres3d.csv --dim 3 --diameter 2 --algorithm screening
+    --cell-budget 1000 --output ${OUT})
+
+# Nothing else was written to the scratch directory (no temporary files left).
+file(GLOB left ${WORK}/* ${WORK}/.*)
+expect_equal("no files left in the scratch directory" "${left}" "")
+
+done()
