@@ -70,18 +70,16 @@ nbs_status nbs_algorithm_from_name(const char *name, nbs_algorithm *out) {
 /* Below this many elements, checking every pair is cheaper than building any list. */
 #define NBS__AUTO_DIRECT_MAX 32
 
-/* auto: NBS wherever its head arrays are small next to N (the book's algorithm, O(N) time
- * and memory); otherwise sorting, whose memory is 3N/4N integers whatever the spread and
- * which compresses axes too wide to index, so that every finite input succeeds. */
+/* auto: cellsort, nbs's fastest path (linear in N, about 36 bytes per element whatever
+ * the domain's extent), wherever its 64-bit cell key can index the domain; otherwise
+ * sorting, whose memory is 3N/4N integers whatever the spread and which compresses axes
+ * too wide to index, so that every finite input succeeds. A handful of elements is
+ * checked directly. */
 static nbs_algorithm nbs__choose(const nbs__run *run) {
   if (run->n <= NBS__AUTO_DIRECT_MAX) return NBS_DIRECT;
   const nbs__grid *g = &run->grid;
   if (!g->fits) return NBS_SORTING;
-  int64_t heads = g->n[0] * 2 + g->n[1] * (run->dim == 3 ? 2 : 1) + (run->dim == 3 ? g->n[2] : 0);
-  int64_t limit = 4 * (int64_t)run->n + 4096;
-  if (heads > limit) return NBS_SORTING;
-  if ((uint64_t)(heads + 8) * sizeof(int32_t) > run->ctx->cell_budget) return NBS_SORTING;
-  return NBS_NBS;
+  return nbs__cellsort_fits(g) ? NBS_CELLSORT : NBS_SORTING;
 }
 
 /* ---- memory -------------------------------------------------------------------------- */

@@ -116,7 +116,12 @@ nbs_status nbs__prepare(nbs__run *run, const nbs_input *in) {
     /* The same formula as nbs__cell, applied to the largest coordinate: rounding is
      * monotone, so every element's cell is <= this one. */
     double top = (hi[a] - lo[a]) * g->inv_edge;
-    if (top < (double)NBS__AXIS_MAX) {
+    if (g->inv_edge == 0.0) {
+      /* One cell holds everything, even an extent that overflows; with lo = 0, x - lo is
+       * finite for every element and the cell formula gives 0, never inf * 0. */
+      g->lo[a] = 0.0;
+      g->n[a] = 1;
+    } else if (top < (double)NBS__AXIS_MAX) {
       g->n[a] = (int64_t)top + 1;
     } else {
       g->n[a] = -1; /* too many cells, or an extent that overflows to infinity */

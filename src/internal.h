@@ -47,7 +47,7 @@ static inline bool nbs__is_marked(int32_t head) { return head < NBS__EMPTY; }
  * not neighbours (see nbs__prepare for the argument). */
 typedef struct nbs__grid {
   int dim;
-  double lo[3], hi[3]; /* bounding box of the centres */
+  double lo[3], hi[3]; /* bounding box of the centres (lo is 0 when edge is +inf) */
   double edge;         /* cell edge; +inf when diameters are so large that every pair may touch */
   double inv_edge;     /* 1 / edge (0 when edge is +inf) */
   int64_t n[3];        /* cells per axis; -1 when the axis exceeds NBS__AXIS_MAX or overflows */
@@ -203,6 +203,8 @@ nbs_status nbs__screening(nbs__run *run);
 nbs_status nbs__sorting(nbs__run *run);
 nbs_status nbs__nbs(nbs__run *run);
 nbs_status nbs__cellsort(nbs__run *run);
+/* True when cellsort's 64-bit cell key can index the grid (auto's test). */
+bool nbs__cellsort_fits(const nbs__grid *g);
 
 /* Work-block layouts, for work_kind. */
 enum { NBS__WORK_NONE = 0, NBS__WORK_SCREENING = 1, NBS__WORK_SORTING = 2, NBS__WORK_NBS = 3,

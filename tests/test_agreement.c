@@ -196,12 +196,63 @@ static void test_time_steps(void) {
   }
 }
 
+/* cellsort's threads: the same pairs in the same order for 1 to 4 threads, and the same
+ * contacts as NBS (checked against direct in the tests above). */
+static void test_threads(void) {
+  for (int dim = 2; dim <= 3; dim++) {
+    for (int wide = 0; wide < 2; wide++) {
+      scene_def def = scene_default_def();
+      def.dim = dim;
+      def.n = 120000;
+      def.kind = wide ? SCENE_WIDE : SCENE_UNIFORM;
+      scene s;
+      char err[200];
+      ASSERT_MSG(scene_generate(&def, &s, err, sizeof err) == 0, "%s", err);
+      nbs_input in = scene_input(&s);
+      nbs_pair *first = NULL;
+      size_t first_count = 0;
+      for (int threads = 1; threads <= 4; threads++) {
+        nbs_context_def cdef = nbs_default_context_def();
+        cdef.threads = threads;
+        nbs_context *ctx;
+        ASSERT_OK(nbs_context_create(&cdef, &ctx));
+        nbs_detect_def ddef = nbs_default_detect_def();
+        ddef.algorithm = NBS_CELLSORT;
+        ASSERT_OK(nbs_detect(ctx, &in, &ddef));
+        size_t count;
+        const nbs_pair *p = nbs_pairs(ctx, &count);
+        if (threads == 1) {
+          first = malloc(count * sizeof *first);
+          memcpy(first, p, count * sizeof *p);
+          first_count = count;
+          pair_list got = {first, count}, ref;
+          got.p = malloc(count * sizeof *p);
+          memcpy(got.p, p, count * sizeof *p);
+          nbs_sort_pairs(got.p, count);
+          ASSERT_OK(detect_sorted(ctx, &s, NBS_NBS, NBS_MODE_CONTACTS, &ref));
+          CHECK_MSG(pair_lists_equal(&got, &ref), "%dD: cellsort and nbs differ", dim);
+          pair_list_free(&got);
+          pair_list_free(&ref);
+        } else {
+          CHECK_MSG(count == first_count && memcmp(p, first, count * sizeof *p) == 0,
+                    "%dD %s: %d threads give other output than one", dim, wide ? "wide" : "uniform",
+                    threads);
+        }
+        nbs_context_destroy(ctx);
+      }
+      free(first);
+      scene_free(&s);
+    }
+  }
+}
+
 int main(int argc, char **argv) {
   static const test_case tests[] = {
       {"scenes_2d", test_scenes_2d},
       {"scenes_3d", test_scenes_3d},
       {"fresh_contexts", test_fresh_contexts},
       {"time_steps", test_time_steps},
+      {"threads", test_threads},
   };
   return test_main(argc, argv, tests, sizeof tests / sizeof *tests);
 }
