@@ -157,8 +157,17 @@ int cli_read(const char *path, const cli_read_opts *o, cli_elements *out, cli_fo
   case CLI_FORMAT_F64:
     code = cli_read_f64(f, path, o, out);
     break;
+  case CLI_FORMAT_DUMP:
+    code = cli_read_dump(f, path, o, out);
+    break;
+  case CLI_FORMAT_VTK:
+    code = cli_read_vtk(f, path, o, out);
+    break;
+  case CLI_FORMAT_VTP:
+    code = cli_read_vtp(f, path, o, out);
+    break;
   default:
-    code = cli_input_error(path, 0, 0, "reading %s files is not supported", cli_format_name(fmt));
+    code = cli_fail(CLI_USAGE, "unknown format %d", (int)fmt);
     break;
   }
   fclose(f);
