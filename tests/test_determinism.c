@@ -1,0 +1,399 @@
+/*
+ * Determinism: the same input gives byte-identical pairs
+ *   - across runs: repeated detections, fresh contexts, contexts that held another layout,
+ *     and the callback sink, each in the algorithm's own order (not sorted);
+ *   - across thread counts: cellsort (and auto) with 1, 2, 3, 4, 7 and 8 threads, in order;
+ *   - across algorithms: after nbs_sort_pairs every algorithm gives the same bytes;
+ *   - across builds and machines: golden hashes (FNV-1a 64 of the sorted pair list, each
+ *     index as 4 little-endian bytes) of fixed scenes, committed below.
+ *
+ * The golden scenes use no transcendental function, so that their coordinates do not depend
+ * on the C library: the lattice, faces and identical scenes of scenes/ (whose coordinates
+ * are integers times the diameter, or one point; the library's pow() only picks the lattice
+ * side there, an integer), and the generator below, which uses splitmix64 and only
+ * +, * and integer-to-double conversions, all exact or correctly rounded in IEEE 754.
+ *
+ * Regenerating the golden table (only after a deliberate change of the contract or of a
+ * scene): NBS_GOLDEN_PRINT=1 build/tests/test_determinism golden_hashes
+ * prints the table in C; paste it over `goldens` below and say why in the commit.
+ */
+#include "internal.h"
+#include "test.h"
+#include "util.h"
+
+#include <stdint.h>
+
+/* ---- scenes without transcendental functions ------------------------------------------ */
+
+static uint64_t det_next(uint64_t *state) {
+  uint64_t z = (*state += 0x9e3779b97f4a7c15ull);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  return z ^ (z >> 31);
+}
+
+/* Uniform in [0, 1), exactly (a 53-bit integer times 2^-53). */
+static double det_uniform(uint64_t *state) { return (double)(det_next(state) >> 11) * 0x1p-53; }
+
+typedef enum det_kind {
+  DET_UNIFORM,   /* uniform in a box of edge `box` */
+  DET_QUANTIZED, /* uniform on a grid of step 1/8: many pairs exactly at the contact distance */
+  DET_RADII,     /* uniform, radii uniform in [0.05, 0.5] (ratio 10) */
+  DET_CLUSTERS,  /* two dense boxes far apart, plus a few outliers at 1e12 */
+} det_kind;
+
+static scene det_scene(det_kind kind, int dim, int64_t n, double box, double offset,
+                       uint64_t seed) {
+  scene s;
+  memset(&s, 0, sizeof s);
+  s.dim = dim;
+  s.n = n;
+  s.diameter = 1.0;
+  s.coords = malloc((size_t)n * (size_t)dim * sizeof(double));
+  if (!s.coords) abort();
+  if (kind == DET_RADII) {
+    s.radii = malloc((size_t)n * sizeof(double));
+    if (!s.radii) abort();
+  }
+  uint64_t rng = seed;
+  for (int64_t k = 0; k < n; k++) {
+    for (int a = 0; a < dim; a++) {
+      double v;
+      switch (kind) {
+      case DET_QUANTIZED:
+        v = (double)(det_next(&rng) % (uint64_t)(box * 8.0)) * 0.125;
+        break;
+      case DET_CLUSTERS:
+        v = det_uniform(&rng) * box + (k % 2 ? 1000.0 : 0.0);
+        if (k % 97 == 0) v += 1e12;
+        break;
+      default:
+        v = det_uniform(&rng) * box;
+        break;
+      }
+      s.coords[k * dim + a] = v + offset;
+    }
+    if (s.radii) s.radii[k] = 0.05 + 0.45 * det_uniform(&rng);
+  }
+  return s;
+}
+
+static scene lib_scene(scene_kind kind, int dim, int64_t n) {
+  scene_def def = scene_default_def();
+  def.kind = kind;
+  def.dim = dim;
+  def.n = n;
+  scene s;
+  char err[200];
+  if (scene_generate(&def, &s, err, sizeof err) != 0) {
+    fprintf(stderr, "scene: %s\n", err);
+    abort();
+  }
+  return s;
+}
+
+/* ---- the fixed scenes ---------------------------------------------------------------- */
+
+typedef struct det_case {
+  const char *name;
+  int dim;
+} det_case;
+
+static const det_case cases[] = {
+    {"lattice-2d", 2},   {"lattice-3d", 3},   {"faces-2d", 2},     {"faces-3d", 3},
+    {"identical-3d", 3}, {"uniform-2d", 2},   {"uniform-3d", 3},   {"quantized-2d", 2},
+    {"quantized-3d", 3}, {"radii-2d", 2},     {"radii-3d", 3},     {"offset1e9-3d", 3},
+    {"clusters-3d", 3},
+};
+#define NCASES (sizeof cases / sizeof *cases)
+
+static scene make_case(size_t c) {
+  const int dim = cases[c].dim;
+  switch (c) {
+  case 0:
+  case 1: return lib_scene(SCENE_LATTICE, dim, 1000);
+  case 2:
+  case 3: return lib_scene(SCENE_FACES, dim, 1000);
+  case 4: return lib_scene(SCENE_IDENTICAL, dim, 200);
+  case 5: return det_scene(DET_UNIFORM, dim, 3000, 50.0, 0.0, 11);
+  case 6: return det_scene(DET_UNIFORM, dim, 4000, 14.0, 0.0, 12);
+  case 7: return det_scene(DET_QUANTIZED, dim, 3000, 40.0, 0.0, 13);
+  case 8: return det_scene(DET_QUANTIZED, dim, 4000, 12.0, 0.0, 14);
+  case 9: return det_scene(DET_RADII, dim, 3000, 30.0, 0.0, 15);
+  case 10: return det_scene(DET_RADII, dim, 4000, 9.0, 0.0, 16);
+  case 11: return det_scene(DET_UNIFORM, dim, 3000, 12.0, 1e9, 17);
+  default: return det_scene(DET_CLUSTERS, dim, 3000, 10.0, 0.0, 18);
+  }
+}
+
+/* ---- hashing ------------------------------------------------------------------------- */
+
+/* FNV-1a 64 of the pairs, each index as 4 little-endian bytes (the same on every host). */
+static uint64_t fnv1a_pairs(const nbs_pair *p, size_t count) {
+  uint64_t h = 0xcbf29ce484222325ull;
+  for (size_t k = 0; k < count; k++) {
+    const uint32_t v[2] = {(uint32_t)p[k].i, (uint32_t)p[k].j};
+    for (int w = 0; w < 2; w++) {
+      for (int b = 0; b < 4; b++) {
+        h ^= (v[w] >> (8 * b)) & 0xffu;
+        h *= 0x100000001b3ull;
+      }
+    }
+  }
+  return h;
+}
+
+/* The golden table: contacts of each case, sorted. */
+typedef struct golden {
+  const char *name;
+  uint64_t count;
+  uint64_t hash;
+} golden;
+
+static const golden goldens[] = {
+    {"lattice-2d", 1936, 0xac4a4703b133f029ull},
+    {"lattice-3d", 2700, 0x6a8143df562c2b4cull},
+    {"faces-2d", 3811, 0xc2f77b61839d8e36ull},
+    {"faces-3d", 10476, 0xdd22af248ceb5548ull},
+    {"identical-3d", 19900, 0x57e37b98cb8c2be5ull},
+    {"uniform-2d", 5605, 0x1c957d35e140f095ull},
+    {"uniform-3d", 11294, 0x4dc71e1e1ac16919ull},
+    {"quantized-2d", 8581, 0xb4c5bd01658aa26aull},
+    {"quantized-3d", 17710, 0xdee6f9f3c70475c6ull},
+    {"radii-2d", 5437, 0x284ae48d687c6115ull},
+    {"radii-3d", 9510, 0xd1f8c81df8330f90ull},
+    {"offset1e9-3d", 9829, 0x86b1da4745100d4bull},
+    {"clusters-3d", 8343, 0x7bf4b74b2b211fdaull},
+};
+
+/* ---- helpers ------------------------------------------------------------------------- */
+
+/* One detection; the pairs in the algorithm's order (not sorted), in a malloc'ed list. */
+static nbs_status detect_raw(nbs_context *ctx, const scene *s, nbs_algorithm algo, nbs_mode mode,
+                             pair_list *out) {
+  out->p = NULL;
+  out->count = 0;
+  nbs_input in = scene_input(s);
+  nbs_detect_def def = nbs_default_detect_def();
+  def.algorithm = algo;
+  def.mode = mode;
+  nbs_status st = nbs_detect(ctx, &in, &def);
+  if (st != NBS_OK) return st;
+  size_t count;
+  const nbs_pair *p = nbs_pairs(ctx, &count);
+  out->p = malloc((count ? count : 1) * sizeof *out->p);
+  if (!out->p) abort();
+  if (count) memcpy(out->p, p, count * sizeof *p);
+  out->count = count;
+  return NBS_OK;
+}
+
+typedef struct collector {
+  pair_list l;
+  size_t cap;
+} collector;
+
+static int collect(void *user, const nbs_pair *pairs, size_t count) {
+  collector *c = user;
+  if (c->l.count + count > c->cap) {
+    c->cap = 2 * (c->l.count + count);
+    c->l.p = realloc(c->l.p, c->cap * sizeof *c->l.p);
+    if (!c->l.p) abort();
+  }
+  memcpy(c->l.p + c->l.count, pairs, count * sizeof *pairs);
+  c->l.count += count;
+  return 0;
+}
+
+/* The same detection through a callback: the batches concatenated. */
+static nbs_status detect_callback(nbs_context *ctx, const scene *s, nbs_algorithm algo,
+                                  nbs_mode mode, pair_list *out) {
+  collector c = {{NULL, 0}, 0};
+  nbs_input in = scene_input(s);
+  nbs_detect_def def = nbs_default_detect_def();
+  def.algorithm = algo;
+  def.mode = mode;
+  def.callback = collect;
+  def.user = &c;
+  nbs_status st = nbs_detect(ctx, &in, &def);
+  *out = c.l;
+  if (!out->p) {
+    out->p = malloc(sizeof *out->p);
+    if (!out->p) abort();
+  }
+  return st;
+}
+
+/* ---- tests --------------------------------------------------------------------------- */
+
+/* Every algorithm, both modes: the same bytes in the same order from a fresh context, from
+ * the same context again, from a context that last held another algorithm's layout for a
+ * larger scene, and through a callback. */
+static void test_repeat_runs(void) {
+  for (size_t c = 0; c < NCASES; c++) {
+    scene s = make_case(c);
+    scene other = det_scene(DET_UNIFORM, 3, 6000, 40.0, -5.0, 99);
+    for (int a = 0; a < NBS_ALGORITHM_COUNT; a++) {
+      const nbs_algorithm algo = (nbs_algorithm)a;
+      for (int mode = 0; mode < 2; mode++) {
+        nbs_context *fresh, *used;
+        ASSERT_OK(nbs_context_create(NULL, &fresh));
+        ASSERT_OK(nbs_context_create(NULL, &used));
+        pair_list first, again, reused, viacb, scratch;
+        nbs_status st = detect_raw(fresh, &s, algo, (nbs_mode)mode, &first);
+        if (st != NBS_OK) {
+          /* only the documented refusals, and the same refusal every time */
+          CHECK_MSG(st == NBS_ERR_BUDGET || st == NBS_ERR_EXTENT, "%s %s: %s", cases[c].name,
+                    nbs_algorithm_name(algo), nbs_status_name(st));
+          CHECK_STATUS(detect_raw(used, &s, algo, (nbs_mode)mode, &again), st);
+          nbs_context_destroy(fresh);
+          nbs_context_destroy(used);
+          continue;
+        }
+        ASSERT_OK(detect_raw(fresh, &s, algo, (nbs_mode)mode, &again));
+        /* the other context: another scene with each algorithm first, then this one */
+        for (int b = 0; b < NBS_ALGORITHM_COUNT; b++) {
+          if (detect_raw(used, &other, (nbs_algorithm)b, NBS_MODE_CONTACTS, &scratch) == NBS_OK) {
+            pair_list_free(&scratch);
+          }
+        }
+        ASSERT_OK(detect_raw(used, &s, algo, (nbs_mode)mode, &reused));
+        ASSERT_OK(detect_callback(used, &s, algo, (nbs_mode)mode, &viacb));
+        CHECK_MSG(pair_lists_equal(&first, &again), "%s %s mode %d: a repeated run differs",
+                  cases[c].name, nbs_algorithm_name(algo), mode);
+        CHECK_MSG(pair_lists_equal(&first, &reused), "%s %s mode %d: a used context differs",
+                  cases[c].name, nbs_algorithm_name(algo), mode);
+        CHECK_MSG(pair_lists_equal(&first, &viacb), "%s %s mode %d: the callback order differs",
+                  cases[c].name, nbs_algorithm_name(algo), mode);
+        pair_list_free(&first);
+        pair_list_free(&again);
+        pair_list_free(&reused);
+        pair_list_free(&viacb);
+        nbs_context_destroy(fresh);
+        nbs_context_destroy(used);
+      }
+    }
+    scene_free(&other);
+    scene_free(&s);
+  }
+}
+
+/* Threads: cellsort and auto give the same bytes, in the same order, for every thread
+ * count (and with a callback or max_pairs, which keep them on one thread). The scene is
+ * large enough (60000 elements) for cellsort to use threads. Without OpenMP the thread
+ * count is ignored and the comparison still holds. */
+static void test_thread_counts(void) {
+  const int counts[] = {1, 2, 3, 4, 7, 8};
+  for (int dim = 2; dim <= 3; dim++) {
+    scene s = det_scene(DET_QUANTIZED, dim, 60000, dim == 2 ? 300.0 : 45.0, 0.0, 21);
+    const nbs_algorithm algos[] = {NBS_CELLSORT, NBS_AUTO};
+    for (size_t a = 0; a < 2; a++) {
+      for (int mode = 0; mode < 2; mode++) {
+        pair_list ref = {NULL, 0};
+        for (size_t t = 0; t < sizeof counts / sizeof *counts; t++) {
+          nbs_context_def cdef = nbs_default_context_def();
+          cdef.threads = counts[t];
+          nbs_context *ctx;
+          ASSERT_OK(nbs_context_create(&cdef, &ctx));
+          pair_list got, again, viacb;
+          ASSERT_OK(detect_raw(ctx, &s, algos[a], (nbs_mode)mode, &got));
+          ASSERT_OK(detect_raw(ctx, &s, algos[a], (nbs_mode)mode, &again));
+          ASSERT_OK(detect_callback(ctx, &s, algos[a], (nbs_mode)mode, &viacb));
+          if (t == 0) {
+            CHECK_MSG(got.count > (size_t)s.n / 2, "%dD: only %zu pairs", dim, got.count);
+            ref = got;
+            got.p = NULL;
+          } else {
+            CHECK_MSG(pair_lists_equal(&got, &ref), "%dD %s mode %d: %d threads differ from 1",
+                      dim, nbs_algorithm_name(algos[a]), mode, counts[t]);
+          }
+          CHECK_MSG(pair_lists_equal(&again, &ref), "%dD %s mode %d, %d threads: a repeat differs",
+                    dim, nbs_algorithm_name(algos[a]), mode, counts[t]);
+          CHECK_MSG(pair_lists_equal(&viacb, &ref), "%dD %s mode %d, %d threads: the callback "
+                    "differs", dim, nbs_algorithm_name(algos[a]), mode, counts[t]);
+          free(got.p);
+          pair_list_free(&again);
+          pair_list_free(&viacb);
+          nbs_context_destroy(ctx);
+        }
+        pair_list_free(&ref);
+      }
+    }
+    scene_free(&s);
+  }
+}
+
+/* After nbs_sort_pairs, every algorithm's contacts are the same bytes, and their hash is
+ * the committed golden one. */
+static void test_golden_hashes(void) {
+  const bool print = getenv("NBS_GOLDEN_PRINT") != NULL;
+  if (print) printf("static const golden goldens[] = {\n");
+  for (size_t c = 0; c < NCASES; c++) {
+    scene s = make_case(c);
+    nbs_context *ctx;
+    ASSERT_OK(nbs_context_create(NULL, &ctx));
+    pair_list ref;
+    ASSERT_OK(detect_sorted(ctx, &s, NBS_DIRECT, NBS_MODE_CONTACTS, &ref));
+    const uint64_t hash = fnv1a_pairs(ref.p, ref.count);
+    if (print) {
+      printf("    {\"%s\", %zu, 0x%016llxull},\n", cases[c].name, ref.count,
+             (unsigned long long)hash);
+    }
+    for (int a = 0; a < NBS_ALGORITHM_COUNT; a++) {
+      pair_list got;
+      nbs_status st = detect_sorted(ctx, &s, (nbs_algorithm)a, NBS_MODE_CONTACTS, &got);
+      if (st != NBS_OK) {
+        CHECK_MSG(st == NBS_ERR_BUDGET || st == NBS_ERR_EXTENT, "%s %s: %s", cases[c].name,
+                  nbs_algorithm_name((nbs_algorithm)a), nbs_status_name(st));
+        continue;
+      }
+      CHECK_MSG(pair_lists_equal(&got, &ref) && fnv1a_pairs(got.p, got.count) == hash,
+                "%s: %s's sorted contacts differ from direct's", cases[c].name,
+                nbs_algorithm_name((nbs_algorithm)a));
+      pair_list_free(&got);
+    }
+    const golden *g = NULL;
+    for (size_t k = 0; k < sizeof goldens / sizeof *goldens; k++) {
+      if (strcmp(goldens[k].name, cases[c].name) == 0) g = &goldens[k];
+    }
+    if (!print) {
+      CHECK_MSG(g != NULL, "%s: no golden hash (see the top of this file)", cases[c].name);
+      if (g) {
+        CHECK_MSG(g->count == ref.count && g->hash == hash,
+                  "%s: %zu contacts with hash 0x%016llx; golden: %llu with 0x%016llx",
+                  cases[c].name, ref.count, (unsigned long long)hash,
+                  (unsigned long long)g->count, (unsigned long long)g->hash);
+      }
+    }
+    pair_list_free(&ref);
+    nbs_context_destroy(ctx);
+    scene_free(&s);
+  }
+  if (print) printf("};\n");
+}
+
+/* The hash itself, on known bytes, so that a broken hash cannot pass for a stable one. */
+static void test_hash_function(void) {
+  CHECK_TRUE(fnv1a_pairs(NULL, 0) == 0xcbf29ce484222325ull);
+  /* FNV-1a 64 of the 8 bytes 01 00 00 00 02 00 00 00 */
+  const nbs_pair p = {1, 2};
+  uint64_t h = 0xcbf29ce484222325ull;
+  const unsigned char bytes[8] = {1, 0, 0, 0, 2, 0, 0, 0};
+  for (int b = 0; b < 8; b++) {
+    h ^= bytes[b];
+    h *= 0x100000001b3ull;
+  }
+  CHECK_TRUE(fnv1a_pairs(&p, 1) == h);
+  const nbs_pair q = {2, 1};
+  CHECK_TRUE(fnv1a_pairs(&q, 1) != h);
+}
+
+int main(int argc, char **argv) {
+  static const test_case tests[] = {
+      {"hash_function", test_hash_function},
+      {"repeat_runs", test_repeat_runs},
+      {"thread_counts", test_thread_counts},
+      {"golden_hashes", test_golden_hashes},
+  };
+  return test_main(argc, argv, tests, sizeof tests / sizeof *tests);
+}
