@@ -34,6 +34,8 @@
 #endif
 
 #define NBS__RADIX_BITS 11
+/* Entries after the end of the key array, read by NBS__CS_ADVANCE. */
+#define NBS__CS_PAD 4
 /* Sub-cells per cell edge on the x axis: a power of two, so that scaling is exact; fewer
  * when the key would not fit 64 bits otherwise. */
 #define NBS__CS_FINE_BITS 3
@@ -190,23 +192,42 @@ nbs__cs_range(const nbs__cs *c, nbs__sink *s, int dim, bool radii, bool contacts
   size_t need = (size_t)(q1 - q0);
   s->candidates += need;
   if (s->cap - s->count < need) {
+    /* The slow path works on a copy, so that the sweep's sink, whose address never
+     * escapes, can live in registers. */
+    nbs__sink t = *s;
     bool room;
-    NBS__TRY(nbs__sink_room(s, need, &room));
-    if (!room) {
-      for (int32_t q = q0; q < q1; q++) {
+    nbs_status st = nbs__sink_room(&t, need, &room);
+    if (st == NBS_OK && !room) {
+      for (int32_t q = q0; q < q1 && st == NBS_OK; q++) {
         nbs_pair one;
-        if (nbs__cs_kernel(c, dim, radii, contacts, p, q, q + 1, &one)) {
-          NBS__TRY(nbs__sink_one(s, one));
-        }
+        if (nbs__cs_kernel(c, dim, radii, contacts, p, q, q + 1, &one)) st = nbs__sink_one(&t, one);
       }
-      return NBS_OK;
+      *s = t;
+      return st;
     }
+    *s = t;
+    NBS__TRY(st);
   }
   size_t m = nbs__cs_kernel(c, dim, radii, contacts, p, q0, q1, s->buf + s->count);
   s->count += m;
   s->emitted += m;
   return NBS_OK;
 }
+
+/* Moves a window's edge q forwards while key[q] OP bound. Edges mostly move by 0 to 3
+ * places, in no pattern a branch predictor learns, and each step of a plain loop waits for
+ * the load before it. So four keys are compared at once, without a branch (the keys are
+ * sorted: the count of those that pass is the step), and only a step of four loops. The
+ * key array has NBS__CS_PAD entries of UINT64_MAX after the end, never below a bound. */
+#define NBS__CS_ADVANCE(key, q, OP, bound)                                                    \
+  do {                                                                                        \
+    int32_t nbs__step;                                                                        \
+    do {                                                                                      \
+      nbs__step = ((key)[(q)] OP(bound)) + ((key)[(q) + 1] OP(bound)) +                       \
+                  ((key)[(q) + 2] OP(bound)) + ((key)[(q) + 3] OP(bound));                    \
+      (q) += nbs__step;                                                                       \
+    } while (nbs__step == 4);                                                                 \
+  } while (0)
 
 /* The lower bound of `k` in key[0, hi). */
 static int32_t nbs__cs_lower(const uint64_t *key, int32_t hi, uint64_t k) {
@@ -227,7 +248,7 @@ static int32_t nbs__cs_lower(const uint64_t *key, int32_t hi, uint64_t k) {
  * |dx| <= edge: about 9 cell volumes are searched per element instead of 13.5. Every window only
  * moves forwards, so finding them costs O(1) per element and row. */
 static inline __attribute__((always_inline)) nbs_status
-nbs__cs_sweep(const nbs__cs *c, nbs__sink *s, int dim, bool radii, int32_t from, int32_t to) {
+nbs__cs_sweep_rows(const nbs__cs *c, nbs__sink *s, int dim, bool radii, int32_t from, int32_t to) {
   const bool contacts = c->run->mode == NBS_MODE_CONTACTS;
   const uint64_t *key = c->key;
   const int bx = c->bx, by = c->by;
@@ -250,7 +271,7 @@ nbs__cs_sweep(const nbs__cs *c, nbs__sink *s, int dim, bool radii, int32_t from,
     for (int32_t p = a; p < b; p++) {
       const uint64_t k = key[p], fx = k & mx;
       const uint64_t lo = k - (fx < fine ? fx : fine);
-      while (key[w] < lo) w++;
+      NBS__CS_ADVANCE(key, w, <, lo);
       NBS__TRY(nbs__cs_range(c, s, dim, radii, contacts, p, w, p));
     }
     /* each neighbouring row: a window of fx - fine .. fx + fine */
@@ -268,15 +289,25 @@ nbs__cs_sweep(const nbs__cs *c, nbs__sink *s, int dim, bool radii, int32_t from,
         const uint64_t fx = key[p] & mx;
         const uint64_t lo = base + (fx > fine ? fx - fine : 0);
         const uint64_t hi = base + (mx - fx > fine ? fx + fine : mx);
-        while (key[q0] < lo) q0++; /* both stop at a at the latest: key[a] > base + mx */
+        /* both stop at a at the latest: key[a] > base + mx */
+        NBS__CS_ADVANCE(key, q0, <, lo);
         if (q1 < q0) q1 = q0;
-        while (key[q1] <= hi) q1++;
+        NBS__CS_ADVANCE(key, q1, <=, hi);
         if (q1 > q0) NBS__TRY(nbs__cs_range(c, s, dim, radii, contacts, p, q0, q1));
       }
     }
     a = b;
   }
   return NBS_OK;
+}
+
+/* The sweep on a local copy of the sink (kept in registers), written back at the end. */
+static inline __attribute__((always_inline)) nbs_status
+nbs__cs_sweep(const nbs__cs *c, nbs__sink *s, int dim, bool radii, int32_t from, int32_t to) {
+  nbs__sink local = *s;
+  nbs_status st = nbs__cs_sweep_rows(c, &local, dim, radii, from, to);
+  *s = local;
+  return st;
 }
 
 static nbs_status nbs__cs_sweep_any(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to) {
@@ -331,7 +362,7 @@ nbs_status nbs__cellsort(nbs__run *run) {
 
   /* layout: key[n] | idx[n, padded to 8 bytes] | xs[n * dim] | rs[n] | hist[2^11] */
   size_t nn = (size_t)n;
-  size_t key_b = nn * sizeof(uint64_t);
+  size_t key_b = (nn + NBS__CS_PAD) * sizeof(uint64_t);
   size_t idx_b = (nn * sizeof(int32_t) + 7) & ~(size_t)7;
   size_t xs_b = nn * (size_t)dim * sizeof(double);
   size_t rs_b = run->r ? nn * sizeof(double) : 0;
@@ -388,6 +419,7 @@ nbs_status nbs__cellsort(nbs__run *run) {
   uint64_t *tk = (uint64_t *)(void *)c.xs;
   int32_t *ti = (int32_t *)(void *)(c.xs + nn);
   nbs__radix(c.key, c.idx, tk, ti, n, bx + by + bz, hist);
+  for (size_t t = nn; t < nn + NBS__CS_PAD; t++) c.key[t] = UINT64_MAX;
   /* 3. gather */
 #if defined(_OPENMP)
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
