@@ -44,6 +44,11 @@ int cli_input_error(const char *file, long line, long column, const char *fmt, .
  * limits. */
 int cli_status_code(nbs_status s);
 
+/* s as a JSON string, quoted and escaped. */
+void cli_json_string(FILE *f, const char *s);
+/* "16.4 MB": bytes in decimal units. */
+void cli_format_bytes(char *buf, size_t len, double bytes);
+
 /* -q: no progress bar, no informational lines. */
 extern bool cli_quiet;
 
@@ -153,8 +158,8 @@ int cli_read(const char *path, const cli_read_opts *o, cli_elements *out, cli_fo
 /* The format a file's first bytes and name suggest. */
 cli_format cli_sniff(const char *path, const unsigned char *head, size_t len);
 
-/* What is wrong with a value ("is NaN", "is negative", ...), or NULL: coordinates must be
- * finite, radii finite and > 0. */
+/* What is wrong with a value ("is NaN", "-1 is negative", ...), or NULL: coordinates must
+ * be finite, radii finite and > 0. The text is valid until the next call. */
 const char *cli_value_problem(double v, bool radius);
 /* Reports a value's problem as FILE:LINE:COLUMN: WHAT PROBLEM; CLI_OK or CLI_INPUT. */
 int cli_check_value(const char *file, long line, long column, double v, bool radius,

@@ -78,22 +78,6 @@ typedef struct cli_detect_opts {
   cli_vtp_opts vtp_opts;
 } cli_detect_opts;
 
-static void cli_json_string(FILE *f, const char *s) {
-  fputc('"', f);
-  for (; *s; s++) {
-    unsigned char c = (unsigned char)*s;
-    if (c == '"' || c == '\\') {
-      fputc('\\', f);
-      fputc(c, f);
-    } else if (c < 0x20) {
-      fprintf(f, "\\u%04x", c);
-    } else {
-      fputc(c, f);
-    }
-  }
-  fputc('"', f);
-}
-
 static int cli_detect_parse(int argc, char **argv, cli_detect_opts *o, bool *help) {
   memset(o, 0, sizeof *o);
   o->read = cli_default_read_opts();

@@ -13,6 +13,7 @@ static const char cli_main_help[] =
     "Commands:\n"
     "  detect     find the contacting pairs of a file of elements\n"
     "  generate   write a scene (uniform, lattice, clustered, sparse, wide, ...)\n"
+    "  info       what a file holds, and what each algorithm needs in memory for it\n"
     "\n"
     "  nbs COMMAND --help   the options of a command, with examples\n"
     "  nbs --version        the tool's and the library's versions\n"
@@ -36,5 +37,6 @@ int main(int argc, char **argv) {
   }
   if (strcmp(cmd, "detect") == 0) return cli_detect(argc - 1, argv + 1);
   if (strcmp(cmd, "generate") == 0) return cli_generate(argc - 1, argv + 1);
+  if (strcmp(cmd, "info") == 0) return cli_info(argc - 1, argv + 1);
   return cli_usage(NULL, "unknown command '%s'", cmd);
 }

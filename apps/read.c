@@ -37,9 +37,13 @@ cli_read_opts cli_default_read_opts(void) {
 }
 
 const char *cli_value_problem(double v, bool radius) {
+  static char negative[64];
   if (isnan(v)) return "is NaN";
   if (isinf(v)) return "is infinite";
-  if (radius && v < 0) return "is negative";
+  if (radius && v < 0) {
+    snprintf(negative, sizeof negative, "%g is negative", v);
+    return negative;
+  }
   if (radius && v == 0) return "is 0: it must be > 0";
   return NULL;
 }
@@ -48,7 +52,6 @@ int cli_check_value(const char *file, long line, long column, double v, bool rad
                     const char *what) {
   const char *p = cli_value_problem(v, radius);
   if (!p) return CLI_OK;
-  if (radius && v < 0) return cli_input_error(file, line, column, "%s %g %s", what, v, p);
   return cli_input_error(file, line, column, "%s %s", what, p);
 }
 
@@ -640,10 +643,8 @@ int cli_read_f64(FILE *f, const char *path, const cli_read_opts *o, cli_elements
       const char *p = cli_value_problem(v, radius);
       if (p) {
         cli_dbuf_free(&all);
-        char shown[40] = "";
-        if (radius && v < 0) snprintf(shown, sizeof shown, " %g", v);
-        return cli_input_error(path, (long)k + 1, (long)a + 1, "%s%s %s (element %zu, byte %zu)",
-                               radius ? what[3] : what[a], shown, p, k + 1, (k * rec + a) * 8);
+        return cli_input_error(path, (long)k + 1, (long)a + 1, "%s %s (element %zu, byte %zu)",
+                               radius ? what[3] : what[a], p, k + 1, (k * rec + a) * 8);
       }
     }
   }

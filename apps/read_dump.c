@@ -390,6 +390,17 @@ int cli_read_dump(FILE *f, const char *path, const cli_read_opts *o, cli_element
       }
       code = cli_dump_atoms(&d, o, dim, &c, &box, n, out);
       found = code == CLI_OK;
+      /* What follows must be the next snapshot or the end: more atom lines than the count
+       * means the count is wrong. */
+      while (code == CLI_OK && cli_dump_next(&d)) {
+        if (d.len == 0) continue;
+        if (!cli_dump_is(&d, "ITEM:")) {
+          code = cli_input_error(path, d.lineno, 1,
+                                 "NUMBER OF ATOMS is %lld, but the snapshot has more atom lines",
+                                 (long long)n);
+        }
+        break;
+      }
       break;
     }
     /* Not this one: skip its atom lines. */

@@ -344,6 +344,7 @@ static int cli_vtp_structure(cli_vtp *x, const cli_read_opts *o) {
     }
   }
   if (!root) return cli_vtp_error(x, 0, "not a VTK XML file: no <VTKFile>");
+  if (depth > 0) return cli_vtp_error(x, x->len, "truncated: the file ends before </%s>", stack[depth - 1]);
   return CLI_OK;
 }
 
@@ -724,7 +725,7 @@ int cli_read_vtp(FILE *f, const char *path, const cli_read_opts *o, cli_elements
                            (long long)pc->radius.ncomp);
     } else if ((uint64_t)pc->n > cli_vtp_capacity(&x, &pc->points) / 3 ||
                (!o->has_diameter && (uint64_t)pc->n > cli_vtp_capacity(&x, &pc->radius))) {
-      code = cli_vtp_error(&x, pc->at, "NumberOfPoints %lld: more than the file's data can hold",
+      code = cli_vtp_error(&x, pc->at, "NumberOfPoints %lld: more than the file's data can hold (truncated?)",
                            (long long)pc->n);
     } else if (pc->n > INT32_MAX - total) {
       code = cli_vtp_error(&x, pc->at, "more than 2^31 - 1 points");

@@ -72,6 +72,22 @@ int cli_status_code(nbs_status s) {
   }
 }
 
+void cli_json_string(FILE *f, const char *s) {
+  fputc('"', f);
+  for (; *s; s++) {
+    unsigned char c = (unsigned char)*s;
+    if (c == '"' || c == '\\') {
+      fputc('\\', f);
+      fputc(c, f);
+    } else if (c < 0x20) {
+      fprintf(f, "\\u%04x", c);
+    } else {
+      fputc(c, f);
+    }
+  }
+  fputc('"', f);
+}
+
 /* ---- numbers -------------------------------------------------------------------------- */
 
 bool cli_parse_double(const char *s, double *out) {

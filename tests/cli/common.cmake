@@ -97,6 +97,20 @@ function(expect_equal name got want)
   endif()
 endfunction()
 
+# nbs_algorithms(var): the library's algorithms as `nbs info --algorithms` lists them (auto
+# included); fails unless the book's four and auto are there.
+function(nbs_algorithms var)
+  nbs_run(r info --algorithms)
+  string(REGEX REPLACE "\n$" "" list "${r_out}")
+  string(REPLACE "\n" ";" list "${list}")
+  foreach(a auto direct screening sorting nbs)
+    if(NOT a IN_LIST list)
+      fail("info --algorithms does not list ${a}: ${r_out}")
+    endif()
+  endforeach()
+  set(${var} ${list} PARENT_SCOPE)
+endfunction()
+
 # done(): the closing line; the script fails if a check did.
 macro(done)
   message(STATUS "${NBS_CHECKS} checks run")

@@ -49,6 +49,48 @@ bad(empty_f64 3 "empty.f64:1:1: empty file: no elements\n"
 bad(f64_needs_dim 2 "a raw f64 file needs --dim 2 or 3"
     detect --input ${B}/nan.f64 --output ${OUT})
 
+# Malformed dumps (LAMMPS / LIGGGHTS), legacy VTK and VTK XML: data/bad/make_bad.py made them
+# from the good fixtures. Hostile counts are refused by comparing them with the file's size.
+set(dumps
+  "hostile_count.dump|hostile_count.dump:4:1: NUMBER OF ATOMS is 999999999999, more than the rest of the file \\(4650 bytes\\) can hold"
+  "truncated.dump|truncated.dump:40:1: truncated: NUMBER OF ATOMS is 60, the file ends after 30 atom lines"
+  "extra.dump|extra.dump:69:1: NUMBER OF ATOMS is 59, but the snapshot has more atom lines"
+  "columns.dump|columns.dump:12:61: 5 values, expected 6 as named by ITEM: ATOMS"
+  "number.dump|number.dump:12:24: '0.5x' is not a number"
+  "nan.dump|nan.dump:13:43: z is NaN"
+  "negradius.dump|negradius.dump:14:61: radius -0.25 is negative"
+  "noz.dump|noz.dump:9:1: ITEM: ATOMS has no z column \\(z, zu, zs or zsu\\). use --dim 2 for a 2D dump"
+  "noradius.dump|noradius.dump:9:1: ITEM: ATOMS has no radius or diameter column. give --diameter"
+  "notimestep.dump|notimestep.dump:1:1: expected 'ITEM: TIMESTEP', found 'ITEM: TIMESTOP'"
+  "hostile_points.vtk|hostile_points.vtk:5:8: POINTS declares 2000000000 points, more than the 4877 bytes left can hold"
+  "truncated_binary.vtk|truncated_binary.vtk:5:8: POINTS declares 60 points, more than the 700 bytes left can hold"
+  "badkeyword.vtk|badkeyword.vtk:62:1: unknown keyword 'POINT_DATTA'"
+  "nan.vtk|nan.vtk:6:52: coordinate is NaN"
+  "negradius_binary.vtk|negradius_binary.vtk:52:1: radius -1 is negative \\(value 1 of radius, byte 4829\\)"
+  "notvtk.vtk|notvtk.vtk:1:1: not a legacy VTK file"
+  "noradius.vtk|noradius.vtk: no point array 'radius' or 'diameter'. give --diameter or --radius NAME"
+  "hostile_points.vtp|hostile_points.vtp:3:5: NumberOfPoints 900000000: more than the file's data can hold"
+  "hostile_blocks.vtp|hostile_blocks.vtp:25:9: Points: the header claims 1099511627776 blocks, more than the file holds"
+  "corrupt_zlib.vtp|corrupt_zlib.vtp:25:9: Points: block 0 is not valid zlib data of 1440 bytes"
+  "truncated_appended.vtp|truncated_appended.vtp:3:5: NumberOfPoints 60: more than the file's data can hold"
+  "badbase64.vtp|badbase64.vtp:20:9: radius: truncated: a character that is not base64"
+  "lz4.vtp|lz4.vtp:1:1: compressor 'vtkLZ4DataCompressor' is not supported"
+  "nan.vtp|nan.vtp:87:11: coordinate is NaN"
+  "negradius.vtp|negradius.vtp:59:11: radius -0.5 is negative"
+  "nopoints.vtp|nopoints.vtp:4:5: a Piece of 60 points without a Points array"
+  "unterminated.vtp|unterminated.vtp:6:1: truncated: the file ends before </PointData>"
+  "wrongcount.vtp|wrongcount.vtp:86:9: Points: 180 values, 183 expected")
+foreach(entry ${dumps})
+  string(REPLACE "|" ";" entry "${entry}")
+  list(GET entry 0 file)
+  list(GET entry 1 message)
+  bad(${file} 3 "${message}" detect --input ${B}/${file} --output ${OUT})
+endforeach()
+bad(no_snapshot 3 "snapshots.dump: no snapshot 5: the file has 3 \\(0 to 2\\)"
+    detect --input ${DATA}/formats/snapshots.dump --snapshot 5 --output ${OUT})
+bad(no_timestep 3 "snapshots.dump: no snapshot of timestep 7 \\(the file has 3\\)"
+    detect --input ${DATA}/formats/snapshots.dump --timestep 7 --output ${OUT})
+
 # Files that cannot be read.
 bad(missing 3 "no-such-file.csv: cannot open: No such file or directory\n"
     detect --input ${WORK}/no-such-file.csv --dim 2 --output ${OUT})

@@ -3,7 +3,7 @@
 cmake_minimum_required(VERSION 3.25)
 include(${CMAKE_CURRENT_LIST_DIR}/common.cmake)
 set(G ${DATA}/golden)
-set(ALGORITHMS direct screening sorting nbs auto)
+nbs_algorithms(ALGORITHMS)
 
 # golden(name expected args...): every algorithm writes exactly the expected file, and
 # without --output prints 'pairs: N' with N its line count.
