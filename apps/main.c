@@ -11,6 +11,7 @@ static const char cli_main_help[] =
     "Contact detection for discrete element simulations.\n"
     "\n"
     "Commands:\n"
+    "  demo       every algorithm on a million spheres, checked; a ParaView file and a picture\n"
     "  detect     find the contacting pairs of a file of elements\n"
     "  generate   write a scene (uniform, lattice, clustered, sparse, wide, ...)\n"
     "  info       what a file holds, and what each algorithm needs in memory for it\n"
@@ -18,7 +19,8 @@ static const char cli_main_help[] =
     "  nbs COMMAND --help   the options of a command, with examples\n"
     "  nbs --version        the tool's and the library's versions\n"
     "\n"
-    "Example:\n"
+    "Examples:\n"
+    "  nbs demo\n"
     "  nbs detect --input spheres.csv --dim 3 --output pairs.csv\n";
 
 int main(int argc, char **argv) {
@@ -38,5 +40,6 @@ int main(int argc, char **argv) {
   if (strcmp(cmd, "detect") == 0) return cli_detect(argc - 1, argv + 1);
   if (strcmp(cmd, "generate") == 0) return cli_generate(argc - 1, argv + 1);
   if (strcmp(cmd, "info") == 0) return cli_info(argc - 1, argv + 1);
+  if (strcmp(cmd, "demo") == 0) return cli_demo(argc - 1, argv + 1);
   return cli_usage(NULL, "unknown command '%s'", cmd);
 }
