@@ -102,7 +102,7 @@ void cli_out_abort(cli_out *o);
  * terminal and not -q. progress_update is cheap: call it as often as convenient. */
 typedef struct cli_progress {
   const char *label;
-  double total, start, last;
+  double total, start, last, after;
   bool shown, enabled;
 } cli_progress;
 

@@ -44,6 +44,8 @@ static const char cli_detect_help[] =
     "                      the contacts (a superset that depends on the algorithm)\n"
     "  --repeat K          detect K times with one context; report the fastest (default 1)\n"
     "  --cell-budget BYTES largest cell array the library may allocate (default 1 GiB)\n"
+    "  --threads T         threads for the algorithms that use them (0, the default: the\n"
+    "                      cores; the pairs do not depend on it)\n"
     "\n"
     "Output:\n"
     "  --output FILE       the pairs; without it, print 'pairs: N'\n"
@@ -54,7 +56,7 @@ static const char cli_detect_help[] =
     "  --no-compress       do not zlib-compress the .vtp's binary data\n"
     "  --stats             one JSON object on stderr: algorithm, dim, n, pairs, seconds,\n"
     "                      ns_per_element, bytes, candidates, cells, compressed, work_bytes...\n"
-    "  -q, --quiet         no progress bar\n"
+    "  -q, --quiet         no progress bar (shown on a terminal for work over a second)\n"
     "\n"
     "Exit status: 0 success, 2 usage error, 3 bad input (FILE:LINE:COLUMN: message),\n"
     "4 out of memory or over a limit, 1 other failure.\n"
@@ -74,6 +76,7 @@ typedef struct cli_detect_opts {
   bool stats;
   int64_t repeat;
   size_t cell_budget;
+  int threads;
   cli_pairs_format pairs_format;
   cli_vtp_opts vtp_opts;
 } cli_detect_opts;
@@ -139,6 +142,12 @@ static int cli_detect_parse(int argc, char **argv, cli_detect_opts *o, bool *hel
         return cli_usage(cmd, "--cell-budget %s: give a number of bytes", a.missing ? "" : a.val);
       }
       o->cell_budget = (size_t)b;
+    } else if (cli_opt(&a, "--threads")) {
+      int64_t t;
+      if (a.missing || !cli_parse_int64(a.val, &t) || t > 1024) {
+        return cli_usage(cmd, "--threads %s: give 0 (the cores) to 1024", a.missing ? "" : a.val);
+      }
+      o->threads = (int)t;
     } else if (cli_opt(&a, "--format")) {
       int f = a.missing ? -1 : cli_format_from_name(a.val);
       if (f <= 0) return cli_usage(cmd, "--format %s: use csv, f64, dump, vtk or vtp", a.missing ? "" : a.val);
@@ -259,6 +268,7 @@ int cli_detect(int argc, char **argv) {
 
   nbs_context_def cdef = nbs_default_context_def();
   cdef.cell_budget = o.cell_budget;
+  cdef.threads = o.threads;
   nbs_context *ctx = NULL;
   nbs_status s = nbs_context_create(&cdef, &ctx);
   if (s != NBS_OK) {

@@ -280,18 +280,28 @@ void cli_out_abort(cli_out *o) {
 
 /* ---- progress bar --------------------------------------------------------------------- */
 
+/* The bar appears after this many seconds of work: 1, or NBS_PROGRESS_AFTER (which the
+ * tests set to 0 to see the bar without waiting). */
+static double cli_progress_after(void) {
+  const char *s = getenv("NBS_PROGRESS_AFTER");
+  double v;
+  return s && cli_parse_double(s, &v) && v >= 0 ? v : 1.0;
+}
+
 void cli_progress_begin(cli_progress *p, const char *label, double total) {
   memset(p, 0, sizeof *p);
   p->label = label;
   p->total = total;
   p->start = cli_now();
   p->enabled = !cli_quiet && isatty(STDERR_FILENO);
+  p->after = p->enabled ? cli_progress_after() : 0;
+  p->last = -1.0;
 }
 
 void cli_progress_update(cli_progress *p, double done) {
   if (!p->enabled) return;
   double t = cli_now();
-  if (t - p->start < 1.0 || t - p->last < 0.1) return;
+  if (t - p->start < p->after || t - p->last < 0.1) return;
   p->last = t;
   p->shown = true;
   double f = p->total > 0 ? done / p->total : 0.0;

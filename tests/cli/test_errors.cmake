@@ -114,6 +114,14 @@ bad(csv_needs_dim 2 "give --dim 2 or 3 \\(the file has no header naming x, y, z\
 bad(unwritable 4 "no-such-dir/pairs.csv: cannot create: No such file or directory"
     detect --input ${DATA}/golden/circles2d.csv --dim 2 --output ${WORK}/no-such-dir/pairs.csv)
 
+# The target is a directory: the rename fails, the temporary file is removed.
+file(MAKE_DIRECTORY ${WORK}/adir)
+expect(NAME "output is a directory" CODE 4 ERR "adir: cannot write: Is a directory"
+       ARGS detect --input ${DATA}/golden/circles2d.csv --dim 2 --output ${WORK}/adir)
+file(GLOB left ${WORK}/.adir*)
+expect_equal("no temporary file next to adir" "${left}" "")
+file(REMOVE_RECURSE ${WORK}/adir)
+
 # A library error: screening over its cell budget (exit 4, the library's message).
 bad(budget 4 "screening needs [0-9]+ bytes of cell heads .*over the budget of 1000 bytes \\(budget\\)"
     detect --input ${DATA}/golden/spheres3d.csv --dim 3 --diameter 2 --algorithm screening

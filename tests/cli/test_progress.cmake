@@ -1,0 +1,41 @@
+# The progress bar: on stderr only when it is a terminal (here a pseudo-terminal made by
+# util-linux's `script`), never with -q, never into a pipe or a file. NBS_PROGRESS_AFTER=0
+# shows it at once instead of after a second of work, so that no timing is involved.
+cmake_minimum_required(VERSION 3.25)
+include(${CMAKE_CURRENT_LIST_DIR}/common.cmake)
+find_program(SCRIPT script)
+set(ENV{NBS_PROGRESS_AFTER} 0)
+
+expect(NAME generate CODE 0 ERR_EMPTY ARGS generate uniform --n 50000 --output ${WORK}/u.csv)
+expect(NAME "no terminal: no bar" CODE 0 OUT "^pairs: [0-9]+\n$" ERR_EMPTY
+       ARGS detect --input ${WORK}/u.csv)
+
+if(SCRIPT)
+  function(tty var)
+    string(JOIN " " cmd ${NBS} ${ARGN})
+    execute_process(COMMAND ${SCRIPT} -qec "${cmd}" /dev/null RESULT_VARIABLE rc
+                    OUTPUT_VARIABLE out ERROR_VARIABLE err WORKING_DIRECTORY ${WORK})
+    set(${var}_rc ${rc} PARENT_SCOPE)
+    set(${var} "${out}${err}" PARENT_SCOPE)
+  endfunction()
+  tty(t detect --input ${WORK}/u.csv)
+  expect_equal("terminal: exit" "${t_rc}" "0")
+  if(NOT t MATCHES "\rreading +\\[[#.]+\\] +[0-9]+%")
+    fail("terminal: no bar while reading: '${t}'")
+  endif()
+  if(NOT t MATCHES "pairs: [0-9]+")
+    fail("terminal: no result: '${t}'")
+  endif()
+  tty(t generate uniform --n 50000 --output ${WORK}/v.csv)
+  if(NOT t MATCHES "\rwriting +\\[[#.]+\\]")
+    fail("terminal: no bar while writing: '${t}'")
+  endif()
+  tty(t detect --input ${WORK}/u.csv -q)
+  if(t MATCHES "\\[[#.]+\\]")
+    fail("terminal with -q: a bar: '${t}'")
+  endif()
+  set(NBS_CHECKS 5)
+else()
+  message(STATUS "util-linux's script is missing: the terminal half is not run")
+endif()
+done()
