@@ -176,11 +176,11 @@ int scene_generate(const scene_def *def, scene *out, char *err, size_t errlen) {
     break;
   }
   case SCENE_CLUSTERED: {
-    /* 99% in a box of a tenth of the uniform one's edge: crowded (touching densely);
-     * 1% over a box 1000 times as large. */
+    /* 99% packed at the scene's fraction in a box of their own; 1% over a box 1000 times
+     * the uniform one's edge, around it: a domain mostly empty, its elements mostly crowded. */
     int64_t far = n / 100;
-    double small = scene_box(dim, n > 0 ? n : 1, scene_volume(dim, d), 0.5) * 0.5;
-    scene_fill_uniform(out, 0, n - far, 0.0, small, &rng);
+    double near = scene_box(dim, n - far > 0 ? n - far : 1, scene_volume(dim, d), def->fraction);
+    scene_fill_uniform(out, 0, n - far, 0.0, near, &rng);
     scene_fill_uniform(out, n - far, n, -500.0 * box, 1000.0 * box, &rng);
     break;
   }

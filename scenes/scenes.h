@@ -17,7 +17,7 @@ extern "C" {
 typedef enum scene_kind {
   SCENE_UNIFORM = 0,   /* uniform random in a box sized for the volume fraction */
   SCENE_LATTICE,       /* square/cubic lattice of spacing exactly the diameter: all neighbours touch */
-  SCENE_CLUSTERED,     /* most elements in a small ball, a few (1%) far away */
+  SCENE_CLUSTERED,     /* 99% packed at `fraction` in a small box, 1% over a box 1000x larger */
   SCENE_SPARSE,        /* uniform at a low fraction plus a few outliers 1e6 diameters away */
   SCENE_WIDE,          /* per-element radii spread over `size_ratio` (max/min), uniform box */
   SCENE_FACES,         /* centres exactly on the faces of nbs's cells */

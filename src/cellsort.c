@@ -281,7 +281,7 @@ nbs__cs_sweep_rows(const nbs__cs *c, nbs__sink *s, int dim, bool radii, int32_t 
       const uint64_t trow = (uint64_t)z << by | (uint64_t)y, base = trow << bx;
       int32_t q = cur[r];
       if (q < 0) q = nbs__cs_lower(key, a, base); /* first use: search, then forwards */
-      while (key[q] < base) q++; /* stops at a at the latest: key[a] >> bx = row > trow */
+      NBS__CS_ADVANCE(key, q, <, base); /* stops at a at the latest: key[a] >> bx > trow */
       cur[r] = q;
       if (key[q] >> bx != trow) continue; /* the row is empty */
       int32_t q0 = q, q1 = q;

@@ -173,13 +173,14 @@ nbs_status nbs__work_reserve(nbs_context *ctx, size_t bytes) {
   return NBS_OK;
 }
 
-/* Grows the pair buffer to hold at least `need` pairs, by half again its size at least. */
-static nbs_status nbs__pairs_grow(nbs_context *ctx, size_t need) {
+/* Grows the pair buffer to hold at least `need` pairs, by half again its size at least,
+ * but to no more than `limit` pairs (0: no limit; need <= limit). */
+static nbs_status nbs__pairs_grow(nbs_context *ctx, size_t need, size_t limit) {
   if (need <= ctx->pairs_cap) return NBS_OK;
   size_t cap = ctx->pairs_cap + ctx->pairs_cap / 2;
   if (cap < need) cap = need;
   if (cap < 1024) cap = 1024;
-  if (ctx->max_pairs && cap > ctx->max_pairs) cap = ctx->max_pairs;
+  if (limit && cap > limit) cap = limit;
   if (cap > SIZE_MAX / sizeof(nbs_pair)) {
     return nbs__fail(ctx, NBS_ERR_PAIRS, -1, "a buffer of %zu pairs cannot be addressed", need);
   }
@@ -270,7 +271,7 @@ nbs_status nbs_context_reserve(nbs_context *ctx, int64_t n, size_t pairs) {
   /* The largest per-element layout of the algorithms: 4 int32 per element (sorting in 3D),
    * 3 per element plus the per-axis heads (NBS in 3D). */
   NBS__TRY(nbs__work_reserve(ctx, (size_t)n * 4 * sizeof(int32_t)));
-  return nbs__pairs_grow(ctx, pairs);
+  return nbs__pairs_grow(ctx, pairs, 0);
 }
 
 /* ---- the pair sink ------------------------------------------------------------------- */
@@ -291,7 +292,7 @@ nbs_status nbs__flush(nbs__run *run) {
                      ctx->max_pairs);
   }
   ctx->pairs_count = run->count;
-  NBS__TRY(nbs__pairs_grow(ctx, run->count + 1));
+  NBS__TRY(nbs__pairs_grow(ctx, run->count + 1, ctx->max_pairs));
   run->buf = ctx->pairs;
   run->cap = ctx->pairs_cap;
   return NBS_OK;
@@ -311,7 +312,7 @@ nbs_status nbs__room(nbs__run *run, size_t need, bool *room) {
     return NBS_OK;
   }
   ctx->pairs_count = run->count;
-  NBS__TRY(nbs__pairs_grow(ctx, run->count + need));
+  NBS__TRY(nbs__pairs_grow(ctx, run->count + need, ctx->max_pairs));
   run->buf = ctx->pairs;
   run->cap = ctx->pairs_cap;
   return NBS_OK;
@@ -356,15 +357,18 @@ nbs_status nbs_detect(nbs_context *ctx, const nbs_input *in, const nbs_detect_de
   nbs_algorithm algo = d.algorithm == NBS_AUTO ? nbs__choose(&run) : d.algorithm;
   run.ran = algo;
 
-  /* The sink: the pair buffer itself, or a batch of it in callback mode. */
+  /* The sink: the pair buffer itself (holding at most max_pairs), or a batch of it in
+   * callback mode (where max_pairs does not apply: the context holds no pairs). */
   size_t first = run.callback ? NBS__BATCH : 1024;
+  size_t limit = run.callback ? 0 : ctx->max_pairs;
+  if (limit && first > limit) first = limit;
   if (ctx->pairs_cap < first) {
     ctx->pairs_count = 0;
-    NBS__TRY(nbs__pairs_grow(ctx, first));
+    NBS__TRY(nbs__pairs_grow(ctx, first, limit));
   }
   run.buf = ctx->pairs;
   run.cap = run.callback ? NBS__BATCH : ctx->pairs_cap;
-  if (ctx->max_pairs && !run.callback && run.cap > ctx->max_pairs) run.cap = ctx->max_pairs;
+  if (limit && run.cap > limit) run.cap = limit;
 
   nbs_status s = NBS_OK;
   if (run.n >= 2) s = nbs__algorithms[algo].run(&run);

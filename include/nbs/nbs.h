@@ -129,7 +129,8 @@ typedef struct nbs_context_def {
   size_t cell_budget;
   /* Largest number of pairs the context's pair buffer may hold; a detection that finds
    * more returns NBS_ERR_PAIRS (with the count so far in nbs_last_stats). 0 means no
-   * limit beyond allocation failure. Default 0. */
+   * limit beyond allocation failure. Default 0. It does not apply to detections with a
+   * callback, whose pairs the context does not hold. */
   size_t max_pairs;
   /* Threads for the algorithms that use them (cellsort, and so auto): 0 (the default) for
    * OpenMP's default (OMP_NUM_THREADS, or the cores), 1 for none. The pairs are the same,
