@@ -61,10 +61,13 @@ static int nbs__bits(uint64_t count) {
   return b;
 }
 
-/* LSD radix sort of (key, idx) on the low `bits` bits. tk / ti are scratch of n entries.
- * The result ends in key / idx. */
+/* LSD radix sort of (key, idx) on the low `bits` bits. tk / ti are scratch of n entries;
+ * hist holds `threads` histograms. The result ends in key / idx. With several threads each
+ * takes a contiguous part of the input and scatters it after the parts of the threads
+ * before it, bucket by bucket: the sort stays stable, so its result is the same for any
+ * number of threads. */
 static void nbs__radix(uint64_t *key, int32_t *idx, uint64_t *tk, int32_t *ti, int32_t n, int bits,
-                       uint32_t *hist) {
+                       uint32_t *hist, int threads) {
   if (bits == 0) return;
   int passes = (bits + NBS__RADIX_BITS - 1) / NBS__RADIX_BITS;
   int digit = (bits + passes - 1) / passes;
@@ -74,24 +77,50 @@ static void nbs__radix(uint64_t *key, int32_t *idx, uint64_t *tk, int32_t *ti, i
   int32_t *si = idx, *di = ti;
   for (int p = 0; p < passes; p++) {
     int shift = p * digit;
-    memset(hist, 0, buckets * sizeof *hist);
-    for (int32_t k = 0; k < n; k++) hist[(sk[k] >> shift) & mask]++;
+#if defined(_OPENMP)
+#pragma omp parallel num_threads(threads) if (threads > 1)
+#endif
+    {
+      int t = 0;
+#if defined(_OPENMP)
+      t = omp_get_thread_num();
+#endif
+      int32_t from = (int32_t)((int64_t)n * t / threads), to = (int32_t)((int64_t)n * (t + 1) / threads);
+      uint32_t *h = hist + (size_t)t * buckets;
+      memset(h, 0, buckets * sizeof *h);
+      for (int32_t k = from; k < to; k++) h[(sk[k] >> shift) & mask]++;
+    }
     /* a digit shared by every key moves nothing: skip the pass */
-    if (hist[(sk[0] >> shift) & mask] == (uint32_t)n) continue;
+    uint64_t d0 = (sk[0] >> shift) & mask, same = 0;
+    for (int t = 0; t < threads; t++) same += hist[(size_t)t * buckets + d0];
+    if (same == (uint64_t)n) continue;
     uint32_t sum = 0;
     for (size_t b = 0; b < buckets; b++) {
-      uint32_t c = hist[b];
-      hist[b] = sum;
-      sum += c;
+      for (int t = 0; t < threads; t++) {
+        uint32_t c = hist[(size_t)t * buckets + b];
+        hist[(size_t)t * buckets + b] = sum;
+        sum += c;
+      }
     }
-    for (int32_t k = 0; k < n; k++) {
-      uint32_t to = hist[(sk[k] >> shift) & mask]++;
-      dk[to] = sk[k];
-      di[to] = si[k];
+#if defined(_OPENMP)
+#pragma omp parallel num_threads(threads) if (threads > 1)
+#endif
+    {
+      int t = 0;
+#if defined(_OPENMP)
+      t = omp_get_thread_num();
+#endif
+      int32_t from = (int32_t)((int64_t)n * t / threads), to = (int32_t)((int64_t)n * (t + 1) / threads);
+      uint32_t *h = hist + (size_t)t * buckets;
+      for (int32_t k = from; k < to; k++) {
+        uint32_t at = h[(sk[k] >> shift) & mask]++;
+        dk[at] = sk[k];
+        di[at] = si[k];
+      }
     }
-    uint64_t *t = sk;
+    uint64_t *tswap = sk;
     sk = dk;
-    dk = t;
+    dk = tswap;
     int32_t *u = si;
     si = di;
     di = u;
@@ -366,7 +395,10 @@ nbs_status nbs__cellsort(nbs__run *run) {
   size_t idx_b = (nn * sizeof(int32_t) + 7) & ~(size_t)7;
   size_t xs_b = nn * (size_t)dim * sizeof(double);
   size_t rs_b = run->r ? nn * sizeof(double) : 0;
-  size_t hist_b = ((size_t)1 << NBS__RADIX_BITS) * sizeof(uint32_t);
+  int threads = nbs__threads(ctx, n / NBS__CS_MIN_PER_THREAD);
+  /* callbacks and max_pairs need the pairs in one stream */
+  if (run->callback || ctx->max_pairs) threads = 1;
+  size_t hist_b = (size_t)threads * ((size_t)1 << NBS__RADIX_BITS) * sizeof(uint32_t);
   size_t bytes = key_b + idx_b + xs_b + rs_b + hist_b;
   NBS__TRY(nbs__work_reserve(ctx, bytes));
   ctx->work_kind = NBS__WORK_CELLSORT;
@@ -392,10 +424,6 @@ nbs_status nbs__cellsort(nbs__run *run) {
   c.fine = (uint64_t)1 << fine_bits;
   run->work_bytes = bytes;
 
-  int threads = nbs__threads(ctx, n / NBS__CS_MIN_PER_THREAD);
-  /* callbacks and max_pairs need the pairs in one stream */
-  if (run->callback || ctx->max_pairs) threads = 1;
-
   /* 1. keys */
   const double *x = run->x;
   const int sy = bx, sz = bx + by;
@@ -418,7 +446,7 @@ nbs_status nbs__cellsort(nbs__run *run) {
    * per element) */
   uint64_t *tk = (uint64_t *)(void *)c.xs;
   int32_t *ti = (int32_t *)(void *)(c.xs + nn);
-  nbs__radix(c.key, c.idx, tk, ti, n, bx + by + bz, hist);
+  nbs__radix(c.key, c.idx, tk, ti, n, bx + by + bz, hist, threads);
   for (size_t t = nn; t < nn + NBS__CS_PAD; t++) c.key[t] = UINT64_MAX;
   /* 3. gather */
 #if defined(_OPENMP)
