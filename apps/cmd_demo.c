@@ -326,9 +326,11 @@ int cli_demo(int argc, char **argv) {
   size_t win3_count = 0, pic_count = 0;
   cli_elements pic;
   memset(&pic, 0, sizeof pic);
-  char vtp_path[4096], png_path[4096];
-  snprintf(vtp_path, sizeof vtp_path, "%s/demo3d.vtp", o.out);
-  snprintf(png_path, sizeof png_path, "%s/demo2d.png", o.out);
+  /* The paths are printed in full, so that they can be opened from anywhere. */
+  char vtp_path[4096 + 16], png_path[4096 + 16], dir[4096];
+  if (!realpath(o.out, dir)) snprintf(dir, sizeof dir, "%s", o.out);
+  snprintf(vtp_path, sizeof vtp_path, "%s/demo3d.vtp", dir);
+  snprintf(png_path, sizeof png_path, "%s/demo2d.png", dir);
 
   for (int s = 0; s < 2 && code == CLI_OK; s++) {
     const int dim = s == 0 ? 3 : 2;

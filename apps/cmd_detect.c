@@ -7,6 +7,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 static const char cli_detect_help[] =
     "Usage: nbs detect --input FILE [options]\n"
@@ -44,6 +45,8 @@ static const char cli_detect_help[] =
     "                      the contacts (a superset that depends on the algorithm)\n"
     "  --repeat K          detect K times with one context; report the fastest (default 1)\n"
     "  --cell-budget BYTES largest cell array the library may allocate (default 1 GiB)\n"
+    "  --max-pairs N       stop with exit 4 past N pairs (default: what a quarter of the\n"
+    "                      machine's memory holds; 0: no limit)\n"
     "  --threads T         threads for the algorithms that use them (0, the default: the\n"
     "                      cores; the pairs do not depend on it)\n"
     "\n"
@@ -76,6 +79,7 @@ typedef struct cli_detect_opts {
   bool stats;
   int64_t repeat;
   size_t cell_budget;
+  int64_t max_pairs; /* -1: the default */
   int threads;
   cli_pairs_format pairs_format;
   cli_vtp_opts vtp_opts;
@@ -87,6 +91,7 @@ static int cli_detect_parse(int argc, char **argv, cli_detect_opts *o, bool *hel
   o->algorithm = NBS_AUTO;
   o->repeat = 1;
   o->cell_budget = NBS_DEFAULT_CELL_BUDGET;
+  o->max_pairs = -1;
   o->pairs_format = CLI_PAIRS_CSV;
   o->vtp_opts.encoding = CLI_VTP_APPENDED;
   o->vtp_opts.compress = true;
@@ -142,6 +147,10 @@ static int cli_detect_parse(int argc, char **argv, cli_detect_opts *o, bool *hel
         return cli_usage(cmd, "--cell-budget %s: give a number of bytes", a.missing ? "" : a.val);
       }
       o->cell_budget = (size_t)b;
+    } else if (cli_opt(&a, "--max-pairs")) {
+      if (a.missing || !cli_parse_int64(a.val, &o->max_pairs)) {
+        return cli_usage(cmd, "--max-pairs %s: give a count (0: no limit)", a.missing ? "" : a.val);
+      }
     } else if (cli_opt(&a, "--threads")) {
       int64_t t;
       if (a.missing || !cli_parse_int64(a.val, &t) || t > 1024) {
@@ -211,6 +220,10 @@ static int cli_detect_run(const cli_detect_opts *o, const cli_elements *e, nbs_c
     double t = cli_now() - t0;
     if (s != NBS_OK) {
       cli_progress_end(&prog);
+      if (s == NBS_ERR_PAIRS) {
+        return cli_fail(CLI_RESOURCE, "%s: more pairs than the limit of --max-pairs (%s)", o->input,
+                        nbs_status_name(s));
+      }
       return cli_fail(cli_status_code(s), "%s: %s (%s)", o->input, nbs_context_error(ctx),
                       nbs_status_name(s));
     }
@@ -269,6 +282,15 @@ int cli_detect(int argc, char **argv) {
   nbs_context_def cdef = nbs_default_context_def();
   cdef.cell_budget = o.cell_budget;
   cdef.threads = o.threads;
+  /* A file whose radii make every element touch every other would otherwise grow the pair
+   * buffer until the system kills the tool; past the limit the library stops cleanly. */
+  if (o.max_pairs >= 0) {
+    cdef.max_pairs = (size_t)o.max_pairs;
+  } else {
+    long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+    double mem = pages > 0 && page > 0 ? (double)pages * (double)page : 8e9;
+    cdef.max_pairs = (size_t)(mem / 4 / (double)sizeof(nbs_pair));
+  }
   nbs_context *ctx = NULL;
   nbs_status s = nbs_context_create(&cdef, &ctx);
   if (s != NBS_OK) {

@@ -66,7 +66,7 @@ static double cli_radius_of(const cli_elements *e, size_t k) {
 
 /* Shortest text that reads back as the same double. */
 static int cli_fmt_double(char *buf, size_t len, double v) {
-  for (int prec = 15; prec <= 17; prec++) {
+  for (int prec = 16; prec <= 17; prec++) {
     int l = snprintf(buf, len, "%.*g", prec, v);
     if (strtod(buf, NULL) == v) return l;
   }

@@ -114,6 +114,13 @@ bad(csv_needs_dim 2 "give --dim 2 or 3 \\(the file has no header naming x, y, z\
 bad(unwritable 4 "no-such-dir/pairs.csv: cannot create: No such file or directory"
     detect --input ${DATA}/golden/circles2d.csv --dim 2 --output ${WORK}/no-such-dir/pairs.csv)
 
+# More pairs than --max-pairs: stopped cleanly (the default limit protects against files
+# whose radii make everything touch).
+bad(max_pairs 4 "lattice2d.txt: more pairs than the limit of --max-pairs \\(pairs\\)"
+    detect --input ${DATA}/golden/lattice2d.txt --dim 2 --diameter 1 --max-pairs 11 --output ${OUT})
+expect(NAME "max_pairs exact" CODE 0 OUT "^pairs: 12\n$"
+       ARGS detect --input ${DATA}/golden/lattice2d.txt --dim 2 --diameter 1 --max-pairs 12)
+
 # The target is a directory: the rename fails, the temporary file is removed.
 file(MAKE_DIRECTORY ${WORK}/adir)
 expect(NAME "output is a directory" CODE 4 ERR "adir: cannot write: Is a directory"
