@@ -23,7 +23,19 @@ static const char cli_main_help[] =
     "  nbs demo\n"
     "  nbs detect --input spheres.csv --dim 3 --output pairs.csv\n";
 
+static int cli_dispatch(int argc, char **argv);
+
 int main(int argc, char **argv) {
+  int code = cli_dispatch(argc, argv);
+  /* A result that could not be printed (a full disk, a closed pipe) is a failure too. */
+  if (fflush(stdout) != 0 || ferror(stdout)) {
+    fprintf(stderr, "nbs: standard output: write error\n");
+    if (code == CLI_OK) code = CLI_RESOURCE;
+  }
+  return code;
+}
+
+static int cli_dispatch(int argc, char **argv) {
   if (argc < 2) {
     fputs(cli_main_help, stderr);
     return CLI_USAGE;

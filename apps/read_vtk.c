@@ -492,8 +492,9 @@ static int cli_vtk_body(cli_vtk *v, const cli_read_opts *o, cli_vtk_data *d) {
       code = cli_vtk_values(v, 4 * n, &f32, NULL, CLI_VTK_SKIP, true);
     } else if (cli_vtk_is(v, "COLOR_SCALARS")) {
       int64_t m;
-      if (v->nh < 3 || !cli_vtk_count(v->h[2], &m)) {
-        return cli_input_error(v->path, v->hline, 1, "COLOR_SCALARS: expected 'COLOR_SCALARS name count'");
+      if (v->nh < 3 || !cli_vtk_count(v->h[2], &m) || m < 1 || m > 16) {
+        return cli_input_error(v->path, v->hline, 1,
+                               "COLOR_SCALARS: expected 'COLOR_SCALARS name count' (count 1 to 16)");
       }
       code = cli_vtk_values(v, m * d->tuples, &f32, NULL, CLI_VTK_SKIP, true);
     } else if (cli_vtk_is(v, "VECTORS") || cli_vtk_is(v, "NORMALS") || cli_vtk_is(v, "TENSORS") ||

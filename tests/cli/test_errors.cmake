@@ -121,6 +121,14 @@ bad(max_pairs 4 "lattice2d.txt: more pairs than the limit of --max-pairs \\(pair
 expect(NAME "max_pairs exact" CODE 0 OUT "^pairs: 12\n$"
        ARGS detect --input ${DATA}/golden/lattice2d.txt --dim 2 --diameter 1 --max-pairs 12)
 
+# A result that cannot be printed is an error (exit 4), not a silent success.
+if(EXISTS /dev/full)
+  execute_process(COMMAND ${NBS} detect --input ${DATA}/golden/circles2d.csv --dim 2
+                  OUTPUT_FILE /dev/full ERROR_VARIABLE err RESULT_VARIABLE rc)
+  expect_equal("stdout full: exit" "${rc}" "4")
+  expect_equal("stdout full: message" "${err}" "nbs: standard output: write error\n")
+endif()
+
 # The target is a directory: the rename fails, the temporary file is removed.
 file(MAKE_DIRECTORY ${WORK}/adir)
 expect(NAME "output is a directory" CODE 4 ERR "adir: cannot write: Is a directory"
