@@ -64,6 +64,22 @@ foreach(a ${ALGORITHMS})
   endforeach()
 endforeach()
 
+# generate: a lattice is known exactly (spacing = diameter, row-major, radius column), in
+# CSV and in f64 (the same numbers as little-endian doubles).
+expect(NAME "generate lattice" CODE 0 OUT "^x,y,radius\n0,0,0\\.5\n1,0,0\\.5\n0,1,0\\.5\n1,1,0\\.5\n$"
+       ARGS generate lattice --dim 2 --n 4)
+expect(NAME "generate lattice 3D" CODE 0
+       OUT "^x,y,z,radius\n0\\.5,0\\.5,0\\.5,1\n2\\.5,0\\.5,0\\.5,1\n0\\.5,2\\.5,0\\.5,1\n2\\.5,2\\.5,0\\.5,1\n0\\.5,0\\.5,2\\.5,1\n"
+       ARGS generate lattice --dim 3 --n 8 --diameter 2 --offset 0.5)
+expect(NAME "generate lattice f64" CODE 0 ARGS generate lattice --dim 2 --n 2 --output ${WORK}/l.f64)
+file(READ ${WORK}/l.f64 hex HEX)
+# (0, 0, 0.5) (1, 0, 0.5): 0.5 = 0x3fe0000000000000, 1 = 0x3ff0000000000000.
+expect_equal("lattice f64 bytes" "${hex}"
+  "00000000000000000000000000000000000000000000e03f000000000000f03f0000000000000000000000000000e03f")
+# The lattice's own contacts: every horizontal and vertical neighbour, as in lattice2d.txt.
+expect(NAME "generate lattice 9" CODE 0 ARGS generate lattice --dim 2 --n 9 --output ${WORK}/l9.csv)
+golden(lattice_generated ${G}/lattice2d.pairs.csv --input ${WORK}/l9.csv)
+
 # The 0-based indices, i < j, sorted: check the order in a larger file.
 expect(NAME "generate" CODE 0 ARGS generate uniform --dim 2 --n 3000 --output ${WORK}/u2.csv)
 expect(NAME "sorted output" CODE 0 ARGS detect --input ${WORK}/u2.csv --output ${WORK}/u2.pairs.csv)
