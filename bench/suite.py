@@ -104,7 +104,7 @@ class Suite:
             self.fail(tag, "nbs_bench", f"no scene written: {err}")
             return
         if err and a.verbose:
-            log(f"    nbs_bench: {err}")
+            log(f"    {err}")
         for peer in [t for t in PEERS if t in tools]:
             skip = self.skip_peer(peer, scene, dim, n, path)
             if skip:
@@ -241,6 +241,11 @@ def command_output(cmd):
         return "(unavailable)"
 
 
+def first_line(cmd):
+    out = command_output(cmd).splitlines()
+    return out[0] if out else "(unavailable)"
+
+
 def describe_machine(a, started, load_start):
     lines = [f"date: {started}", f"command: bench/run {' '.join(a.argv)}"]
     model, flags = "?", ""
@@ -265,9 +270,10 @@ def describe_machine(a, started, load_start):
               f"load average at start: {load_start}",
               f"load average at end: {open('/proc/loadavg').read().strip()}",
               "lscpu:", *["  " + x for x in cache.splitlines()],
-              f"cc: {command_output(['cc', '--version']).splitlines()[0:1]}",
-              f"c++: {command_output(['c++', '--version']).splitlines()[0:1]}",
-              f"cmake: {command_output(['cmake', '--version']).splitlines()[0:1]}",
+              f"cc: {first_line(['cc', '--version'])}",
+              f"c++: {first_line(['c++', '--version'])}",
+              f"cmake: {first_line(['cmake', '--version'])}",
+              f"lmp: {first_line(['sh', '-c', 'lmp -h | grep -m1 ^LAMMPS'])}",
               f"python: {command_output([PY, '--version'])}",
               f"nbs commit: {command_output(['git', '-C', ROOT, 'rev-parse', 'HEAD'])}"
               + (" (work tree has changes in src/ or include/)" if command_output(
