@@ -12,7 +12,9 @@
  *     that rounds to 0) must give NBS_ERR_COORD / NBS_ERR_RADIUS naming the first element;
  *   - statistics agree with the pairs; list heads are empty after every detection (or the
  *     layout is forgotten after an error); a repeated detection gives the same bytes in the
- *     same order; the context's byte count matches its allocator's; nothing leaks.
+ *     same order; the context's byte count matches its allocator's; nothing leaks;
+ *   - fault injection: one allocation (the k-th after the context's creation) may fail; the
+ *     detection that meets it returns NBS_ERR_NOMEM, and every later one is correct.
  *
  * The doubles are adversarial on purpose: lattices whose step is exactly the contact
  * distance or the cell edge (ties and centres on cell faces), copies of other elements'
@@ -22,10 +24,11 @@
  *
  * Input layout (every read past the end yields 0, so any byte string is a scene):
  *   flags  bit 0 3D, bit 1 per-element radii, bit 2 callback sink, bit 3 max_pairs,
- *          bits 4-5 cell budget (1 MiB, 64 KiB, u16 bytes, 4 * u8 bytes), bit 6 reserve
+ *          bits 4-5 cell budget (1 MiB, 64 KiB, u16 bytes, 4 * u8 bytes), bit 6 reserve,
+ *          bit 7 fail one allocation
  *   n      u8 % 65
  *   diam   u8: index into diameters[], else 8 raw bytes
- *   [budget u16 / u8] [max_pairs u16] [reserve u8]
+ *   [budget u16 / u8] [max_pairs u16] [reserve u8] [failing allocation u8]
  *   origin u8 per axis (origins[], else 8 raw bytes); unit u8 (a step, see fz_unit)
  *   radii  u8 per element (radius ratios), when per-element
  *   coords u8 opcode (+ operands) per element and axis, see fz_coordinate
@@ -125,6 +128,7 @@ typedef struct fz_scene {
   size_t cell_budget;
   size_t max_pairs;
   int reserve; /* -1: none, else the pairs to reserve */
+  long fail_at; /* -1: none, else the allocation (counted after the context's) that fails */
   double unit; /* the lattice step */
   double origin[3];
   double x[FZ_MAX_N * 3];
@@ -248,10 +252,12 @@ static fz_grid fz_make_grid(const fz_scene *s) {
 /* ---- failure report --------------------------------------------------------------------- */
 
 static void fz_dump(const fz_scene *s) {
-  fprintf(stderr, "scene: dim %d, n %d, %s %a, budget %zu, max_pairs %zu, %s sink, reserve %d\n",
+  fprintf(stderr,
+          "scene: dim %d, n %d, %s %a, budget %zu, max_pairs %zu, %s sink, reserve %d, "
+          "failing allocation %ld\n",
           s->dim, s->n, s->per_radius ? "per-element radii, largest diameter about" : "diameter",
           s->diameter, s->cell_budget, s->max_pairs, s->callback ? "callback" : "buffer",
-          s->reserve);
+          s->reserve, s->fail_at);
   for (int k = 0; k < s->n; k++) {
     fprintf(stderr, "  %2d:", k);
     for (int a = 0; a < s->dim; a++) fprintf(stderr, " %a", s->x[k * s->dim + a]);
@@ -339,10 +345,16 @@ static bool fz_touch(const fz_scene *s, int a, int b) {
 typedef struct fz_alloc {
   size_t live_bytes;
   long live;
+  long calls, fail_at; /* the call numbered fail_at fails (none when < 0) */
+  bool failed;         /* a call failed since the flag was last cleared */
 } fz_alloc;
 
 static void *fz_alloc_fn(void *opaque, size_t size) {
   fz_alloc *a = opaque;
+  if (a->calls++ == a->fail_at) {
+    a->failed = true;
+    return NULL;
+  }
   void *p = malloc(size);
   if (p) {
     a->live_bytes += size;
@@ -367,6 +379,7 @@ typedef struct fz_run {
   fz_grid grid;
   nbs_status want_invalid; /* NBS_OK, or the validation error every detection must give */
   int64_t want_element;
+  fz_alloc *alloc;
 } fz_run;
 
 /* Bits needed for the values 0 .. count - 1 (cellsort's packed cell key). */
@@ -427,10 +440,12 @@ static nbs_status fz_detect(const fz_run *R, nbs_algorithm algo, nbs_mode mode, 
     def.callback = fz_collect;
     def.user = out;
   }
+  R->alloc->failed = false;
   nbs_status st = nbs_detect(R->ctx, &R->in, &def);
   if (out->overflow) FZ_FAIL(s, "%s %s: the callback received more pairs than exist", name, mname);
 
   nbs_status want = fz_expected(R, algo);
+  if (R->alloc->failed && want == NBS_OK) want = NBS_ERR_NOMEM;
   bool pairs_limit = st == NBS_ERR_PAIRS && s->max_pairs && !s->callback && want == NBS_OK;
   if (st != want && !pairs_limit) {
     FZ_FAIL(s, "%s %s: status %s, expected %s (%s)", name, mname, nbs_status_name(st),
@@ -526,11 +541,12 @@ static void fz_check(fz_run *R) {
 
     nbs_status st = fz_detect(R, algo, NBS_MODE_CONTACTS, &got, false);
     if (st == NBS_OK) {
-      /* The same input again, in the same context: the same bytes in the same order. */
-      if (fz_detect(R, algo, NBS_MODE_CONTACTS, &again, false) != NBS_OK) {
-        FZ_FAIL(s, "%s: a repeated detection failed", name);
+      /* The same input again, in the same context: the same bytes in the same order (unless
+       * this detection met the failing allocation, which fz_detect has checked). */
+      if (fz_detect(R, algo, NBS_MODE_CONTACTS, &again, false) == NBS_OK &&
+          !fz_equal(&got, &again)) {
+        FZ_FAIL(s, "%s: a repeated detection differs", name);
       }
-      if (!fz_equal(&got, &again)) FZ_FAIL(s, "%s: a repeated detection differs", name);
       nbs_sort_pairs(got.p, got.count);
       if (!fz_well_formed(&got, s->n)) FZ_FAIL(s, "%s: contacts not well formed", name);
       if (!fz_equal(&got, &ref)) {
@@ -580,6 +596,7 @@ static void fz_build(fz_reader *rd, fz_scene *s) {
   }
   s->max_pairs = (flags & 8) ? 1 + fz_u16(rd) % 2500 : 0;
   s->reserve = (flags & 64) ? (int)fz_u8(rd) * 8 : -1;
+  s->fail_at = (flags & 128) ? (long)fz_u8(rd) : -1;
   for (int a = 0; a < s->dim; a++) {
     unsigned o = fz_u8(rd);
     s->origin[a] = o < FZ_NORIGIN ? origins[o] : fz_raw(rd);
@@ -636,7 +653,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   }
   if (R.want_invalid == NBS_OK) R.grid = fz_make_grid(&s);
 
-  fz_alloc counter = {0, 0};
+  fz_alloc counter = {0, 0, 0, -1, false};
   nbs_context_def cdef = nbs_default_context_def();
   cdef.allocator.alloc = fz_alloc_fn;
   cdef.allocator.free = fz_free_fn;
@@ -644,8 +661,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   cdef.cell_budget = s.cell_budget;
   cdef.max_pairs = s.max_pairs;
   if (nbs_context_create(&cdef, &R.ctx) != NBS_OK) FZ_FAIL(&s, "nbs_context_create failed");
-  if (s.reserve >= 0 && nbs_context_reserve(R.ctx, s.n, (size_t)s.reserve) != NBS_OK) {
-    FZ_FAIL(&s, "nbs_context_reserve(%d, %d) failed", s.n, s.reserve);
+  R.alloc = &counter;
+  if (s.fail_at >= 0) counter.fail_at = counter.calls + s.fail_at;
+  if (s.reserve >= 0) {
+    counter.failed = false;
+    nbs_status st = nbs_context_reserve(R.ctx, s.n, (size_t)s.reserve);
+    if (st != (counter.failed ? NBS_ERR_NOMEM : NBS_OK)) {
+      FZ_FAIL(&s, "nbs_context_reserve(%d, %d): %s", s.n, s.reserve, nbs_status_name(st));
+    }
   }
 
   fz_check(&R);

@@ -47,10 +47,11 @@ def raw(v):
 
 class Seed:
     def __init__(self, dim=2, n=16, diam="1", radii=False, callback=False, max_pairs=None,
-                 budget=BUDGET_1M, budget_value=0, reserve=None, origin="0", unit="d"):
+                 budget=BUDGET_1M, budget_value=0, reserve=None, origin="0", unit="d",
+                 fail_at=None):
         flags = (1 if dim == 3 else 0) | (2 if radii else 0) | (4 if callback else 0)
         flags |= (8 if max_pairs is not None else 0) | budget << 4
-        flags |= 64 if reserve is not None else 0
+        flags |= (64 if reserve is not None else 0) | (128 if fail_at is not None else 0)
         b = bytes([flags, n, D[diam]])
         if budget == BUDGET_U16:
             b += struct.pack("<H", budget_value)
@@ -60,6 +61,8 @@ class Seed:
             b += struct.pack("<H", max_pairs - 1)
         if reserve is not None:
             b += bytes([reserve])
+        if fail_at is not None:
+            b += bytes([fail_at])
         origins = origin if isinstance(origin, list) else [origin] * dim
         for o in origins:
             b += bytes([O[o]])
@@ -183,6 +186,15 @@ def detect_seeds():
                 v = rng.choice((float("nan"), float("inf"), 1.0, -2.5e-310, 3.0e300)) if k == 5 else rng.uniform(-4, 4)
                 s.body += op(6) + raw(v)
         seeds[f"raw_{dim}d"] = s
+
+    # one failing allocation, at each of the first few a run of every algorithm reaches
+    for dim in (2, 3):
+        for k in (0, 1, 2, 3, 5, 8, 13):
+            s = Seed(dim=dim, n=64, fail_at=k, callback=(k % 2 == 1), reserve=(40 if k == 0 else None))
+            for i in range(64):
+                for a in range(dim):
+                    s.body += op(1, 0) if i % 2 else op(7) + struct.pack("<H", rng.randrange(65536))
+            seeds[f"nomem_{dim}d_{k}"] = s
 
     # invalid radii (a denormal diameter halves to 0), and a raw negative radius
     s = Seed(dim=3, n=10, radii=True, diam="5e-324")
