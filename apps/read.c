@@ -318,7 +318,8 @@ static int cli_csv_map_spec(const char *path, const char *spec, char **names, si
   return CLI_OK;
 }
 
-/* Columns from header names x, y, [z], radius|diameter. 1 when the header names them. */
+/* Columns from header names x, y, [z], radius|diameter. 1 when the header names them, 0
+ * when it does not name x and y, -1 when it names x and y but no z for a 3D read. */
 static int cli_csv_map_names(char **names, size_t nnames, const cli_read_opts *o, cli_csv_map *m) {
   long x = -1, y = -1, z = -1, r = -1, d = -1;
   for (size_t k = 0; k < nnames; k++) {
@@ -331,7 +332,7 @@ static int cli_csv_map_names(char **names, size_t nnames, const cli_read_opts *o
   }
   if (x < 0 || y < 0) return 0;
   int dim = o->dim ? o->dim : (z >= 0 ? 3 : 2);
-  if (dim == 3 && z < 0) return 0;
+  if (dim == 3 && z < 0) return -1; /* x and y by name, and no z: not positional either */
   m->dim = dim;
   m->col[0] = x;
   m->col[1] = y;
@@ -443,6 +444,11 @@ int cli_read_csv(FILE *f, const char *path, const cli_read_opts *o, cli_elements
       if (o->columns) {
         code = cli_csv_map_spec(path, o->columns, names, nnames, o, &m);
         if (code != CLI_OK) break;
+      } else if (names && cli_csv_map_names(names, nnames, o, &m) < 0) {
+        code = cli_input_error(path, header_line, 1,
+                               "the header names x and y but no z column (z, pz, pos_z, "
+                               "position_z, zu) for --dim 3");
+        break;
       } else if (!names || !cli_csv_map_names(names, nnames, o, &m)) {
         /* By position: D values, or D + 1 with the radius last. */
         if (o->dim == 0) {

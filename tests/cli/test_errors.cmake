@@ -24,6 +24,8 @@ bad(no_radius 3 "twocols.csv:1:1: 2 values: no radius column .* and no --diamete
     detect --input ${B}/twocols.csv --dim 2 --output ${OUT})
 bad(headercount 3 "headercount.csv:2:1: 3 values, but the header on line 1 names 4 columns\n"
     detect --input ${B}/headercount.csv --dim 3 --output ${OUT})
+bad(header_no_z 3 "circles2d.csv:1:1: the header names x and y but no z column"
+    detect --input ${DATA}/golden/circles2d.csv --dim 3 --output ${OUT})
 bad(nan 3 "nan.csv:2:3: y is NaN\n" detect --input ${B}/nan.csv --dim 2 --output ${OUT})
 bad(inf 3 "inf.csv:1:1: x is infinite\n" detect --input ${B}/inf.csv --dim 2 --output ${OUT})
 bad(negradius 3 "negradius.csv:2:5: radius -0.5 is negative\n"
