@@ -393,6 +393,7 @@ nbs_status nbs_detect(nbs_context *ctx, const nbs_input *in, const nbs_detect_de
 
   ctx->pairs_count = run.callback ? 0 : run.count;
   ctx->pairs_valid = true;
+  if (d.sorted && !run.callback) nbs_sort_pairs(ctx->pairs, ctx->pairs_count);
   return NBS_OK;
 }
 

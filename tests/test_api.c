@@ -54,11 +54,39 @@ static void test_sort_pairs(void) {
   nbs_sort_pairs(NULL, 0);
 }
 
+/* def.sorted: the context's own buffer comes back sorted, equal to a sorted copy. */
+static void test_sorted_option(void) {
+  scene_def sd = scene_default_def();
+  sd.n = 3000;
+  scene s;
+  char err[200];
+  ASSERT_MSG(scene_generate(&sd, &s, err, sizeof err) == 0, "%s", err);
+  nbs_context *ctx;
+  ASSERT_OK(nbs_context_create(NULL, &ctx));
+  for (int a = 1; a < NBS_ALGORITHM_COUNT; a++) {
+    pair_list ref;
+    ASSERT_OK(detect_sorted(ctx, &s, (nbs_algorithm)a, NBS_MODE_CONTACTS, &ref));
+    nbs_input in = scene_input(&s);
+    nbs_detect_def def = nbs_default_detect_def();
+    def.algorithm = (nbs_algorithm)a;
+    def.sorted = 1;
+    ASSERT_OK(nbs_detect(ctx, &in, &def));
+    size_t count;
+    const nbs_pair *p = nbs_pairs(ctx, &count);
+    CHECK_EQ(count, ref.count);
+    CHECK_TRUE(count == ref.count && memcmp(p, ref.p, count * sizeof *p) == 0);
+    pair_list_free(&ref);
+  }
+  nbs_context_destroy(ctx);
+  scene_free(&s);
+}
+
 int main(int argc, char **argv) {
   static const test_case tests[] = {
       {"status_names", test_status_names},
       {"algorithm_names", test_algorithm_names},
       {"sort_pairs", test_sort_pairs},
+      {"sorted_option", test_sorted_option},
   };
   return test_main(argc, argv, tests, sizeof tests / sizeof *tests);
 }

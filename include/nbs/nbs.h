@@ -191,6 +191,8 @@ typedef struct nbs_detect_def {
   nbs_mode mode;           /* default NBS_MODE_CONTACTS */
   nbs_pair_fn callback;    /* NULL (default): pairs go to the context's buffer */
   void *user;              /* passed to callback */
+  int sorted;              /* 1: sort the buffer's pairs by i, then j, in place (the same list
+                            * for every algorithm and thread count); ignored with a callback */
 } nbs_detect_def;
 
 NBS_API nbs_detect_def nbs_default_detect_def(void);
