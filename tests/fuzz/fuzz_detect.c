@@ -445,7 +445,9 @@ static nbs_status fz_detect(const fz_run *R, nbs_algorithm algo, nbs_mode mode, 
   if (out->overflow) FZ_FAIL(s, "%s %s: the callback received more pairs than exist", name, mname);
 
   nbs_status want = fz_expected(R, algo);
-  if (R->alloc->failed && want == NBS_OK) want = NBS_ERR_NOMEM;
+  /* A failed allocation ends the detection with NBS_ERR_NOMEM, whatever it would have
+   * returned (the pair buffer is set up before an algorithm can refuse). */
+  if (R->alloc->failed) want = NBS_ERR_NOMEM;
   bool pairs_limit = st == NBS_ERR_PAIRS && s->max_pairs && !s->callback && want == NBS_OK;
   if (st != want && !pairs_limit) {
     FZ_FAIL(s, "%s %s: status %s, expected %s (%s)", name, mname, nbs_status_name(st),
