@@ -10,7 +10,12 @@
  * What is timed: nbs_detect() alone (coordinates in, pairs in the context's buffer out),
  * with one context per algorithm reused over the repeats, as a simulation reuses its
  * context every step. The first detection allocates; the minimum over the repeats is the
- * steady state. Memory: nbs_context_peak_bytes() (everything the library held), and the
+ * steady state.
+ * Threads: --threads T sets nbs_context_def.threads (default 1: the targets are for one
+ * thread; the library's own default, 0, would take every core). With T > 1 the tool is
+ * named nbs-ALG-Tt. hash= is an order-sensitive hash of the pair list, so that runs with
+ * different thread counts can be checked to give identical output.
+ * Memory: nbs_context_peak_bytes() (everything the library held), and the
  * process's peak resident memory above what it held before the algorithm ran (VmHWM after
  * a reset through /proc/self/clear_refs), the figure the peer drivers report too.
  */
@@ -69,14 +74,17 @@ static void usage(FILE *out) {
       "  --sorted           order a generated scene's elements by cell (row-major)\n"
       "  --diameter D       common diameter (default 1)\n"
       "  --write PATH       write the scene's coordinates to PATH (raw f64)\n"
-      "  --algorithms LIST  comma-separated: auto,nbs,sorting,screening,direct\n"
-      "                     (default: all, direct only when N <= --direct-max)\n"
+      "  --algorithms LIST  comma-separated names (auto,nbs,sorting,screening,direct,...)\n"
+      "                     (default: every algorithm of the library, auto first, direct\n"
+      "                     only when N <= --direct-max)\n"
+      "  --threads T        nbs_context_def.threads (default 1; 0: the library's default)\n"
       "  --direct-max N     largest N for direct by default (default 20000)\n"
       "  --repeats K        detections per algorithm; the minimum time is reported (5)\n"
       "  --min-time T       repeat at least until T seconds have been spent (default 0)\n"
       "Output, one line per algorithm:\n"
-      "  tool=nbs-ALG status=ok seconds=.. ns_per_element=.. pairs=.. ran=ALG\n"
-      "  peak_bytes=.. work_bytes=.. pair_bytes=.. rss_extra_bytes=.. n=.. dim=..\n",
+      "  tool=nbs-ALG[-Tt] status=ok seconds=.. ns_per_element=.. pairs=.. ran=ALG\n"
+      "  peak_bytes=.. work_bytes=.. pair_bytes=.. rss_extra_bytes=.. hash=.. threads=..\n"
+      "  n=.. dim=..\n",
       out);
 }
 
@@ -89,12 +97,14 @@ typedef struct options {
   int repeats;
   double min_time;
   long long direct_max;
+  int threads;
 } options;
 
 static int parse_args(int argc, char **argv, options *o) {
   o->def = scene_default_def();
   o->repeats = 5;
   o->direct_max = 20000;
+  o->threads = 1;
   for (int k = 1; k < argc; k++) {
     const char *a = argv[k];
     const char *v = k + 1 < argc ? argv[k + 1] : NULL;
@@ -143,6 +153,9 @@ static int parse_args(int argc, char **argv, options *o) {
     } else if (strcmp(a, "--direct-max") == 0) {
       NEEDS_VALUE;
       o->direct_max = (long long)strtod(v, NULL);
+    } else if (strcmp(a, "--threads") == 0) {
+      NEEDS_VALUE;
+      o->threads = atoi(v);
     } else if (strcmp(a, "--sorted") == 0) {
       o->def.sorted = 1;
     } else {
@@ -205,6 +218,21 @@ static int write_scene_file(const char *path, const scene *s) {
   return ok ? 0 : -1;
 }
 
+/* FNV-1a over the pairs in their order: equal lists give equal hashes. */
+static unsigned long long pairs_hash(const nbs_pair *pairs, size_t count) {
+  unsigned long long h = 1469598103934665603ull;
+  for (size_t k = 0; k < count; k++) {
+    uint32_t v[2] = {(uint32_t)pairs[k].i, (uint32_t)pairs[k].j};
+    for (int w = 0; w < 2; w++) {
+      for (int b = 0; b < 4; b++) {
+        h ^= (v[w] >> (8 * b)) & 0xffu;
+        h *= 1099511628211ull;
+      }
+    }
+  }
+  return h;
+}
+
 /* Runs one algorithm; prints its line. Returns 0, or 1 if it failed for another reason
  * than not fitting the scene (budget, extent). */
 static int run_algorithm(nbs_algorithm alg, const scene *s, const options *o) {
@@ -215,7 +243,9 @@ static int run_algorithm(nbs_algorithm alg, const scene *s, const options *o) {
   reset_peak_rss();
   long long rss_base = proc_status_bytes("VmRSS:");
   nbs_context *ctx = NULL;
-  nbs_status st = nbs_context_create(NULL, &ctx);
+  nbs_context_def cdef = nbs_default_context_def();
+  cdef.threads = o->threads;
+  nbs_status st = nbs_context_create(&cdef, &ctx);
   double best = -1.0, spent = 0.0;
   int done = 0;
   while (st == NBS_OK && (done < o->repeats || spent < o->min_time)) {
@@ -227,7 +257,12 @@ static int run_algorithm(nbs_algorithm alg, const scene *s, const options *o) {
     done++;
   }
   long long rss_extra = proc_status_bytes("VmHWM:") - rss_base;
-  const char *name = nbs_algorithm_name(alg);
+  char name[64];
+  if (o->threads == 1) {
+    snprintf(name, sizeof name, "%s", nbs_algorithm_name(alg));
+  } else {
+    snprintf(name, sizeof name, "%s-%dt", nbs_algorithm_name(alg), o->threads);
+  }
   int failed = 0;
   if (st != NBS_OK) {
     const char *why = ctx ? nbs_context_error(ctx) : nbs_status_message(st);
@@ -238,16 +273,16 @@ static int run_algorithm(nbs_algorithm alg, const scene *s, const options *o) {
     failed = !(st == NBS_ERR_BUDGET || st == NBS_ERR_EXTENT);
   } else {
     size_t count = 0;
-    nbs_pairs(ctx, &count);
+    const nbs_pair *pairs = nbs_pairs(ctx, &count);
     nbs_stats stats;
     nbs_last_stats(ctx, &stats);
     printf("tool=nbs-%s status=ok seconds=%.9g ns_per_element=%.6g pairs=%zu ran=%s "
            "peak_bytes=%zu work_bytes=%zu pair_bytes=%zu rss_extra_bytes=%lld repeats=%d "
-           "candidates=%llu compressed=%d n=%lld dim=%d\n",
+           "candidates=%llu compressed=%d hash=%016llx threads=%d n=%lld dim=%d\n",
            name, best, s->n > 0 ? 1e9 * best / (double)s->n : 0.0, count,
            nbs_algorithm_name(stats.algorithm), nbs_context_peak_bytes(ctx), stats.work_bytes,
            stats.pair_bytes, rss_extra, done, (unsigned long long)stats.candidates,
-           stats.compressed, (long long)s->n, s->dim);
+           stats.compressed, pairs_hash(pairs, count), o->threads, (long long)s->n, s->dim);
   }
   fflush(stdout);
   nbs_context_destroy(ctx);
@@ -281,9 +316,17 @@ int main(int argc, char **argv) {
   }
 
   int failures = 0;
-  char list[256];
-  snprintf(list, sizeof list, "%s",
-           o.algorithms ? o.algorithms : "auto,nbs,sorting,screening,direct");
+  char list[512] = "";
+  if (o.algorithms) {
+    snprintf(list, sizeof list, "%s", o.algorithms);
+  } else {
+    for (int k = 0; k < NBS_ALGORITHM_COUNT; k++) { /* auto is 0: first */
+      const char *nm = nbs_algorithm_name((nbs_algorithm)k);
+      if (!nm) continue;
+      size_t len = strlen(list);
+      snprintf(list + len, sizeof list - len, "%s%s", len ? "," : "", nm);
+    }
+  }
   for (char *save = NULL, *tok = strtok_r(list, ",", &save); tok;
        tok = strtok_r(NULL, ",", &save)) {
     if (strcmp(tok, "none") == 0) continue;

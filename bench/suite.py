@@ -26,13 +26,12 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 PY = "/usr/bin/python3" if os.path.exists("/usr/bin/python3") else sys.executable
 
-NBS_ALGORITHMS = ["auto", "nbs", "sorting", "screening", "direct"]
 PEERS = ["nanoflann", "cgal", "scipy", "lammps", "lammps-nosort"]
 ALL_TOOLS = ["nbs"] + PEERS
 COLUMNS = ["scene", "dim", "order", "N", "fraction", "spacing", "tool", "status", "seconds",
            "ns_per_element", "peak_bytes", "rss_extra_bytes", "work_bytes", "pair_bytes",
-           "pairs", "agree", "ran", "repeats", "note"]
-KEY = ("scene", "dim", "order", "N", "spacing")
+           "pairs", "agree", "ran", "repeats", "threads", "hash", "note"]
+KEY = ("scene", "dim", "order", "N", "spacing", "tool")
 
 
 def log(msg):
@@ -91,12 +90,15 @@ class Suite:
         log(f"== {tag}")
         path = os.path.join(a.workdir, f"{scene}-{dim}d-{order}-{n}-{spacing or 'x'}.f64")
         gen_scene = "uniform" if scene == "density" else scene
-        algs = [x for x in a.algorithms if x != "direct" or n <= a.direct_max]
+        timing = ["--repeats", str(a.repeats), "--min-time", str(a.min_time), "--direct-max",
+                  str(a.direct_max)]
         cmd = [f"{self.bin}/nbs_bench", "--scene", gen_scene, "--dim", str(dim), "--n", str(n),
-               "--fraction", repr(fraction), "--seed", str(a.seed), "--repeats",
-               str(a.repeats), "--min-time", str(a.min_time), "--write", path,
-               "--algorithms", ",".join(algs) if "nbs" in tools else "none",
-               "--direct-max", str(a.direct_max)]
+               "--fraction", repr(fraction), "--seed", str(a.seed), "--write", path] + timing
+        if "nbs" not in tools:
+            cmd += ["--algorithms", "none"]
+        elif a.algorithms != ["all"]:
+            cmd += ["--algorithms", ",".join(x for x in a.algorithms
+                                             if x != "direct" or n <= a.direct_max)]
         if order == "sorted":
             cmd.append("--sorted")
         results, err = self.run_cmd(cmd, "nbs", a.timeout)
@@ -105,6 +107,16 @@ class Suite:
             return
         if err and a.verbose:
             log(f"    {err}")
+        # The same algorithms with more threads, on the same file: time and identical output.
+        have = {r["tool"][4:] for r in results if r.get("status") == "ok"}
+        talgs = [x for x in a.thread_algorithms if x in have]
+        if "nbs" in tools and talgs and n >= a.threads_min_n:
+            for t in a.threads:
+                res, err = self.run_cmd([f"{self.bin}/nbs_bench", "--file", path, "--dim",
+                                         str(dim), "--threads", str(t), "--algorithms",
+                                         ",".join(talgs)] + timing, f"nbs-threads{t}",
+                                        a.timeout)
+                results += res
         for peer in [t for t in PEERS if t in tools]:
             skip = self.skip_peer(peer, scene, dim, n, path)
             if skip:
@@ -171,6 +183,8 @@ class Suite:
             row.update({k: r.get(k, "") for k in COLUMNS if k in r})
             row["tool"] = r["tool"]
             row["status"] = r.get("status", "failed")
+            m = re.match(r"(nbs-.*)-\d+t$", r["tool"])
+            one = next((x for x in results if m and x["tool"] == m.group(1)), None)
             if r["tool"].startswith("nbs-"):
                 row["peak_bytes"] = r.get("peak_bytes", "")
             elif r["tool"] in ("nanoflann", "cgal", "scipy"):
@@ -182,13 +196,17 @@ class Suite:
                     row["agree"] = "NO"
                     self.fail(tag, r["tool"], f"{r['pairs']} pairs, but {ref['tool']} found "
                               f"{ref['pairs']}")
+                if one and one.get("hash") and one.get("hash") != r.get("hash"):
+                    row["agree"] = "NO"
+                    self.fail(tag, r["tool"], f"pair list differs from {one['tool']} "
+                              f"(hash {r.get('hash')} vs {one['hash']})")
             elif row["status"] in ("failed", "timeout", "missing"):
                 self.fail(tag, r["tool"], f"status {row['status']} {r.get('note', '')}")
             self.rows.append(row)
             if row["status"] == "ok":
                 log(f"   {row['tool']:14s} {float(row['ns_per_element']):10.1f} ns/el "
                     f"{int(row['pairs']):>11d} pairs  {row['agree']}"
-                    + (f"  (ran {row['ran']})" if r["tool"] == "nbs-auto" else ""))
+                    + (f"  (ran {row.get('ran')})" if r["tool"] == "nbs-auto" else ""))
             else:
                 log(f"   {row['tool']:14s} {row['status']} {row.get('note', '')}")
 
@@ -273,7 +291,7 @@ def describe_machine(a, started, load_start):
               f"cc: {first_line(['cc', '--version'])}",
               f"c++: {first_line(['c++', '--version'])}",
               f"cmake: {first_line(['cmake', '--version'])}",
-              f"lmp: {first_line(['sh', '-c', 'lmp -h | grep -m1 ^LAMMPS'])}",
+              f"lmp: {first_line(['sh', '-c', 'lmp -h | grep -m1 Simulator'])}",
               f"python: {command_output([PY, '--version'])}",
               f"nbs commit: {command_output(['git', '-C', ROOT, 'rev-parse', 'HEAD'])}"
               + (" (work tree has changes in src/ or include/)" if command_output(
@@ -333,8 +351,7 @@ def summary(rows, n_head):
         out.append("| tool | ns/element (random order) | auto is x faster | "
                    "ns/element (sorted order) | peak bytes/element | pairs |")
         out.append("|---|---:|---:|---:|---:|---:|")
-        for t in [x for x in ["nbs-auto", "nbs-nbs", "nbs-sorting", "nbs-screening"] + PEERS
-                  if x in head]:
+        for t in sorted(head, key=tool_rank):
             r = head[t]
             ratio = nsel(r) / auto if auto else None
             pb = float(r["peak_bytes"]) / n_head if r.get("peak_bytes") else None
@@ -387,19 +404,33 @@ def summary(rows, n_head):
                     if not (u and s):
                         target(f"{scene} within 1.5x of uniform: {tool} {dim}D", None, "")
                         continue
+                    # Memory beyond the pair buffer: a crowded scene has more contacts,
+                    # and the pairs are the caller's output, not the algorithm's memory.
                     rt = nsel(s) / nsel(u)
-                    mem = int(s["peak_bytes"]) / int(u["peak_bytes"])
+                    work = lambda r: int(r["peak_bytes"]) - int(r["pair_bytes"] or 0)  # noqa
+                    mem = work(s) / work(u)
                     target(f"{scene} within 1.5x of uniform, memory <= uniform: {tool} {dim}D "
                            f"N={fmt_n(n_sc)}", rt <= 1.5 and mem <= 1.0,
-                           f"time x{rt:.2f}, peak bytes x{mem:.2f}")
+                           f"time x{rt:.2f}; peak bytes beyond the pair buffer x{mem:.2f} "
+                           f"({work(s) / n_sc:.1f} vs {work(u) / n_sc:.1f} per element)")
     for tool in ("nbs-auto", "nbs-nbs"):
         r = find(rows, tool=tool, dim=3, scene="uniform", N=n_head, order="random")
         if r:
             extra = (int(r["peak_bytes"]) - int(r["pair_bytes"] or 0)) / n_head
             target(f"memory: {tool} peak minus pair buffer <= 40 bytes/element (3D)",
                    extra <= 40, f"{extra:.1f} bytes/element")
-    target("threads: 2 threads >= 1.7x one thread", None,
-           "the public API has no thread count yet")
+    for dim in (3, 2):
+        one = find(rows, tool="nbs-auto", dim=dim, scene="uniform", N=n_head, order="random")
+        two = find(rows, tool="nbs-auto-2t", dim=dim, scene="uniform", N=n_head,
+                   order="random")
+        if one and two:
+            sp = float(one["seconds"]) / float(two["seconds"])
+            same = one.get("hash") and one["hash"] == two.get("hash")
+            target(f"threads: auto with 2 threads >= 1.7x one thread, same output ({dim}D)",
+                   sp >= 1.7 and bool(same), f"speed-up x{sp:.2f}, output "
+                   f"{'identical' if same else 'DIFFERENT'} (ran {two['ran']})")
+        else:
+            target(f"threads: auto with 2 threads >= 1.7x one thread ({dim}D)", None, "")
     out.append("### Targets (3D unless said, uniform fraction 0.5, random order, N = "
                f"{fmt_n(n_head)})\n")
     out.append("| target | measured | status |")
@@ -408,10 +439,22 @@ def summary(rows, n_head):
     return "\n".join(out) + "\n"
 
 
-STYLE = {"nbs-auto": ("C0", "o"), "nbs-nbs": ("C1", "s"), "nbs-sorting": ("C2", "^"),
-         "nbs-screening": ("C3", "v"), "nbs-direct": ("C7", "x"), "nanoflann": ("C4", "D"),
-         "cgal": ("C5", "P"), "scipy": ("C6", "*"), "lammps": ("k", "h"),
-         "lammps-nosort": ("C8", "<")}
+STYLE = {"nbs-auto": ("C0", "o"), "nbs-auto-2t": ("C0", "1"), "nbs-cellsort": ("C9", "d"),
+         "nbs-nbs": ("C1", "s"), "nbs-sorting": ("C2", "^"), "nbs-screening": ("C3", "v"),
+         "nbs-direct": ("C7", "x"), "nanoflann": ("C4", "D"), "cgal": ("C5", "P"),
+         "scipy": ("C6", "*"), "lammps": ("k", "h"), "lammps-nosort": ("C8", "<")}
+SCENE_ORDER = {"uniform": 0, "sparse": 1, "clustered": 2, "huge": 3}
+
+
+def tool_rank(tool):
+    """auto first, then the other nbs algorithms, their thread runs, then the peers."""
+    order = ["nbs-auto", "nbs-cellsort", "nbs-nbs", "nbs-sorting", "nbs-screening",
+             "nbs-direct"]
+    if tool in order:
+        return (0, order.index(tool), tool)
+    if tool.startswith("nbs-"):
+        return (1, 0, tool)
+    return (2, PEERS.index(tool) if tool in PEERS else 99, tool)
 
 
 def plots(rows, out):
@@ -420,7 +463,11 @@ def plots(rows, out):
     import matplotlib.pyplot as plt
 
     ok = [r for r in rows if r["status"] == "ok"]
-    tools = [t for t in STYLE if any(r["tool"] == t for r in ok)]
+    present = sorted({r["tool"] for r in ok}, key=tool_rank)
+    tools = [t for t in present if t in STYLE or not re.search(r"-\d+t$", t)]
+    extra = [t for t in tools if t not in STYLE]
+    for k, t in enumerate(extra):
+        STYLE[t] = (f"C{k % 10}", "p")
 
     def series(tool, dim, scene, order, x="N", y="ns_per_element"):
         pts = sorted((float(r[x]), float(r[y]), int(r["N"])) for r in ok if r["tool"] == tool
@@ -541,8 +588,14 @@ def main(argv):
     ap.add_argument("--orders", default="random,sorted")
     ap.add_argument("--tools", default=",".join(ALL_TOOLS),
                     help="nbs and any of " + ",".join(PEERS))
-    ap.add_argument("--algorithms", default="auto,nbs,sorting,screening,direct",
-                    help="nbs algorithms (direct only for N <= --direct-max)")
+    ap.add_argument("--algorithms", default="all",
+                    help="nbs algorithms (default all the library has; direct only for "
+                         "N <= --direct-max)")
+    ap.add_argument("--threads", default="2",
+                    help="extra thread counts for --thread-algorithms ('' for none); "
+                         "every other nbs run uses one thread")
+    ap.add_argument("--thread-algorithms", default="auto,cellsort")
+    ap.add_argument("--threads-min-n", type=float, default=0)
     ap.add_argument("--fraction", type=float, default=0.5, help="uniform scenes")
     ap.add_argument("--sparse-fraction", type=float, default=0.005)
     ap.add_argument("--other-max-n", type=float, default=1e6,
@@ -585,10 +638,12 @@ def main(argv):
     a.orders = [s for s in a.orders.split(",") if s]
     a.tools = [s for s in a.tools.split(",") if s]
     a.algorithms = [s for s in a.algorithms.split(",") if s]
+    a.threads = [int(x) for x in a.threads.split(",") if x.strip() and int(x) != 1]
+    a.thread_algorithms = [s for s in a.thread_algorithms.split(",") if s]
     a.spacings = number_list(a.spacings, lambda x: int(x) if x == int(x) else x)
     a.sweep_n = int(a.sweep_n)
     for k in ("other_max_n", "peer_max_n", "peer_max_n_other", "nosort_max_n", "direct_max",
-              "head_n"):
+              "head_n", "threads_min_n"):
         setattr(a, k, int(getattr(a, k)))
     bad = [t for t in a.tools if t not in ALL_TOOLS]
     if bad:
@@ -618,8 +673,9 @@ def main(argv):
     if not a.fresh and not a.smoke:
         now = {key_of(r) for r in rows}
         rows = [r for r in load_rows(csv_path) if key_of(r) not in now] + rows
-        rows.sort(key=lambda r: (r["scene"] == "density", r["scene"], -int(r["dim"]), r["order"],
-                                 int(r["N"]), float(r["spacing"] or 0)))
+        rows.sort(key=lambda r: (r["scene"] == "density", SCENE_ORDER.get(r["scene"], 9),
+                                 -int(r["dim"]), r["order"], int(r["N"]),
+                                 float(r["spacing"] or 0), tool_rank(r["tool"])))
     write_rows(csv_path, rows)
     rows = load_rows(csv_path)
     with open(os.path.join(a.out, "machine.txt"), "w") as f:
