@@ -379,11 +379,13 @@ static nbs_status nbs__cs_sweep_any(const nbs__cs *c, nbs__sink *s, int32_t from
   return c->rs ? nbs__cs_sweep(c, s, 2, true, from, to) : nbs__cs_sweep(c, s, 2, false, from, to);
 }
 
+#if defined(_OPENMP)
 /* The first position at or after p where a row starts (n at the end). */
 static int32_t nbs__cs_row_start(const nbs__cs *c, int32_t p) {
   while (p > 0 && p < c->n && c->key[p] >> c->bx == c->key[p - 1] >> c->bx) p++;
   return p;
 }
+#endif
 
 bool nbs__cellsort_fits(const nbs__grid *g) {
   if (!g->fits) return false;

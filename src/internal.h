@@ -27,6 +27,14 @@
 #include <stdint.h>
 #include <string.h>
 
+/* Every algorithm must evaluate the distance test as the same sequence of IEEE operations,
+ * or a tie could be decided differently by two of them: no fused multiply-add. The build
+ * passes -ffp-contract=off; clang also honours the standard pragma (gcc, in its ISO modes,
+ * does not contract across statements anyway, and would warn about the pragma). */
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT OFF
+#endif
+
 /* Largest number of cells on one axis of a regular grid. Cell coordinates, padded by one
  * cell on each side, then fit int32 with room to spare, and the rounding analysis of
  * nbs__prepare (cell edge margin 2^-18) holds for it. */
