@@ -500,20 +500,26 @@ def plots(rows, out):
     # 2. time against spacing (the book's Figs. 3.49-3.53).
     if any(r["scene"] == "density" for r in ok):
         fig, axes = plt.subplots(1, 2, figsize=(13, 5.2))
+        sweep_ns = sorted({int(r["N"]) for r in ok if r["scene"] == "density"}, reverse=True)
+        styles = ["-", "--", ":", "-."]
         for ax, dim in zip(axes, (3, 2)):
-            ns = ""
             for t in tools:
                 c, m = STYLE[t]
-                p = series(t, dim, "density", "random", x="spacing", y="seconds")
-                if p:
-                    ax.plot([q[0] for q in p], [q[1] for q in p], "-", color=c, marker=m,
-                            label=t, ms=5)
-                    ns = fmt_n(p[0][2])
+                for k, n in enumerate(sweep_ns):
+                    p = sorted((float(r["spacing"]), float(r["seconds"])) for r in ok
+                               if r["tool"] == t and r["dim"] == str(dim)
+                               and r["scene"] == "density" and r["N"] == str(n))
+                    if p:
+                        ax.plot([q[0] for q in p], [q[1] for q in p], styles[k % 4], color=c,
+                                marker=m, label=t if k == 0 else None, ms=5)
             ax.set_xscale("log")
             ax.set_yscale("log")
             ax.set_xlabel("mean spacing S/D (density (D/S)^dim)")
             ax.set_ylabel("seconds per detection")
-            ax.set_title(f"{dim}D, N = {ns}, uniform random: time vs packing density")
+            ax.set_title(f"{dim}D uniform random, N = "
+                         + ", ".join(f"{fmt_n(n)} ({styles[k % 4]})"
+                                     for k, n in enumerate(sweep_ns))
+                         + ": time vs packing density", fontsize=10)
             ax.grid(True, which="both", alpha=0.3)
         axes[0].legend(fontsize=8)
         fig.tight_layout()
