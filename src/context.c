@@ -95,6 +95,12 @@ static void nbs__default_free(void *opaque, void *p, size_t size) {
   free(p);
 }
 
+static void *nbs__default_realloc(void *opaque, void *p, size_t old_size, size_t new_size) {
+  (void)opaque;
+  (void)old_size;
+  return realloc(p, new_size);
+}
+
 /* Threads of one detection may allocate at the same time (their pair lists): the user's
  * allocator and the byte count see one call at a time. */
 void *nbs__alloc(nbs_context *ctx, size_t size) {
@@ -125,6 +131,32 @@ void nbs__free(nbs_context *ctx, void *p, size_t size) {
   }
 }
 
+/* Grows (or makes) a block to `size` bytes, keeping its first `keep` bytes: through the
+ * allocator's realloc when it has one, else by allocating, copying and freeing. On failure
+ * the old block is untouched and NULL is returned. */
+static void *nbs__realloc(nbs_context *ctx, void *p, size_t old_size, size_t size, size_t keep) {
+  if (!p) return nbs__alloc(ctx, size);
+  if (!ctx->allocator.realloc) {
+    void *q = nbs__alloc(ctx, size);
+    if (!q) return NULL;
+    if (keep) memcpy(q, p, keep);
+    nbs__free(ctx, p, old_size);
+    return q;
+  }
+  void *q;
+#if defined(_OPENMP)
+#pragma omp critical(nbs__allocator)
+#endif
+  {
+    q = ctx->allocator.realloc(ctx->allocator.opaque, p, old_size, size);
+    if (q) {
+      ctx->bytes = ctx->bytes - old_size + size;
+      if (ctx->bytes > ctx->peak_bytes) ctx->peak_bytes = ctx->bytes;
+    }
+  }
+  return q;
+}
+
 nbs_status nbs__thread_pairs_grow(nbs_context *ctx, int t, size_t need, nbs_pair **buf,
                                   size_t *cap) {
   if (need <= ctx->tcap[t]) {
@@ -136,10 +168,9 @@ nbs_status nbs__thread_pairs_grow(nbs_context *ctx, int t, size_t need, nbs_pair
   if (c < need) c = need;
   if (c < 4096) c = 4096;
   if (c > SIZE_MAX / sizeof(nbs_pair)) return NBS_ERR_NOMEM;
-  nbs_pair *p = nbs__alloc(ctx, c * sizeof(nbs_pair));
+  nbs_pair *p = nbs__realloc(ctx, ctx->tpairs[t], ctx->tcap[t] * sizeof(nbs_pair),
+                             c * sizeof(nbs_pair), ctx->tcap[t] * sizeof(nbs_pair));
   if (!p) return NBS_ERR_NOMEM;
-  if (*buf && need > 0) memcpy(p, ctx->tpairs[t], ctx->tcap[t] * sizeof(nbs_pair));
-  nbs__free(ctx, ctx->tpairs[t], ctx->tcap[t] * sizeof(nbs_pair));
   ctx->tpairs[t] = p;
   ctx->tcap[t] = c;
   *buf = p;
@@ -184,13 +215,12 @@ static nbs_status nbs__pairs_grow(nbs_context *ctx, size_t need, size_t limit) {
   if (cap > SIZE_MAX / sizeof(nbs_pair)) {
     return nbs__fail(ctx, NBS_ERR_PAIRS, -1, "a buffer of %zu pairs cannot be addressed", need);
   }
-  nbs_pair *p = nbs__alloc(ctx, cap * sizeof(nbs_pair));
+  nbs_pair *p = nbs__realloc(ctx, ctx->pairs, ctx->pairs_cap * sizeof(nbs_pair),
+                             cap * sizeof(nbs_pair), ctx->pairs_count * sizeof(nbs_pair));
   if (!p) {
     return nbs__fail(ctx, NBS_ERR_NOMEM, -1, "cannot grow the pair buffer to %zu pairs (%zu bytes)",
                      cap, cap * sizeof(nbs_pair));
   }
-  if (ctx->pairs_count) memcpy(p, ctx->pairs, ctx->pairs_count * sizeof(nbs_pair));
-  nbs__free(ctx, ctx->pairs, ctx->pairs_cap * sizeof(nbs_pair));
   ctx->pairs = p;
   ctx->pairs_cap = cap;
   return NBS_OK;
@@ -226,10 +256,12 @@ nbs_status nbs_context_create(const nbs_context_def *def, nbs_context **out) {
   *out = NULL;
   nbs_context_def d = def ? *def : nbs_default_context_def();
   if ((d.allocator.alloc == NULL) != (d.allocator.free == NULL)) return NBS_ERR_ARGUMENT;
+  if (d.allocator.realloc && !d.allocator.alloc) return NBS_ERR_ARGUMENT;
   if (d.threads < 0) return NBS_ERR_ARGUMENT;
   if (!d.allocator.alloc) {
     d.allocator.alloc = nbs__default_alloc;
     d.allocator.free = nbs__default_free;
+    d.allocator.realloc = nbs__default_realloc;
     d.allocator.opaque = NULL;
   }
   nbs_context *ctx = d.allocator.alloc(d.allocator.opaque, sizeof *ctx);

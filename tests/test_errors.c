@@ -212,12 +212,22 @@ static void test_pair_limits(void) {
 
 static void test_allocator_def(void) {
   nbs_context_def cdef = nbs_default_context_def();
-  test_alloc ta = {0, 0, 0, -1, 0};
+  test_alloc ta = {0, 0, 0, -1, 0, 0};
   cdef.allocator = test_allocator(&ta);
   cdef.allocator.free = NULL;
   nbs_context *ctx = (nbs_context *)&cdef;
   CHECK_STATUS(nbs_context_create(&cdef, &ctx), NBS_ERR_ARGUMENT);
   CHECK_TRUE(ctx == NULL);
+  /* realloc without alloc and free */
+  ta.with_realloc = 1;
+  cdef.allocator = test_allocator(&ta);
+  cdef.allocator.alloc = NULL;
+  cdef.allocator.free = NULL;
+  CHECK_STATUS(nbs_context_create(&cdef, &ctx), NBS_ERR_ARGUMENT);
+  /* negative thread counts */
+  cdef = nbs_default_context_def();
+  cdef.threads = -1;
+  CHECK_STATUS(nbs_context_create(&cdef, &ctx), NBS_ERR_ARGUMENT);
 }
 
 static int count_pairs(void *user, const nbs_pair *pairs, size_t count) {
@@ -233,7 +243,7 @@ static void test_allocation_failure(void) {
     scene s = make_scene(SCENE_IDENTICAL, dim, 120); /* 7140 pairs: the buffer grows */
     scene u = make_scene(SCENE_UNIFORM, dim, 800);
     for (int a = 0; a < NBS_ALGORITHM_COUNT; a++) {
-      for (int sink = 0; sink < 2; sink++) {
+      for (int sink = 0; sink < 4; sink++) { /* bit 0: callback; bit 1: allocator's realloc */
         for (int scn = 0; scn < 2; scn++) {
           const scene *sc = scn ? &u : &s;
           nbs_input in = scene_input(sc);
@@ -246,7 +256,7 @@ static void test_allocation_failure(void) {
           }
           long reached = 0;
           for (long k = 0;; k++) {
-            test_alloc ta = {0, 0, 0, k, 0};
+            test_alloc ta = {0, 0, 0, k, 0, sink >> 1};
             nbs_context_def cdef = nbs_default_context_def();
             cdef.allocator = test_allocator(&ta);
             nbs_context *ctx;
@@ -259,14 +269,14 @@ static void test_allocation_failure(void) {
             nbs_detect_def def = nbs_default_detect_def();
             def.algorithm = (nbs_algorithm)a;
             size_t counted = 0;
-            if (sink) {
+            if (sink & 1) {
               def.callback = count_pairs;
               def.user = &counted;
             }
             st = nbs_detect(ctx, &in, &def);
             if (ta.failures == 0) {
               CHECK_STATUS(st, NBS_OK);
-              if (sink) CHECK_EQ(counted, ref.count);
+              if (sink & 1) CHECK_EQ(counted, ref.count);
               nbs_context_destroy(ctx);
               CHECK_EQ(ta.live, 0);
               reached = k;

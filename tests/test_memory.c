@@ -106,7 +106,7 @@ static void test_no_allocation_after_first(void) {
     scene s = make_scene(SCENE_UNIFORM, dim, 6000, 0.5);
     for (size_t a = 0; a < sizeof algos / sizeof *algos; a++) {
       for (int mode = 0; mode < 2; mode++) {
-        test_alloc ta = {0, 0, 0, -1, 0};
+        test_alloc ta = {0, 0, 0, -1, 0, 0};
         nbs_context_def cdef = nbs_default_context_def();
         cdef.allocator = test_allocator(&ta);
         nbs_context *ctx;
@@ -139,7 +139,7 @@ static void test_no_allocation_after_first(void) {
  * depends only on N). */
 static void test_reserve(void) {
   scene s = make_scene(SCENE_UNIFORM, 3, 4000, 0.5);
-  test_alloc ta = {0, 0, 0, -1, 0};
+  test_alloc ta = {0, 0, 0, -1, 0, 0};
   nbs_context_def cdef = nbs_default_context_def();
   cdef.allocator = test_allocator(&ta);
   nbs_context *ctx;

@@ -87,7 +87,26 @@ static void test_free_fn(void *opaque, void *ptr, size_t size) {
   free(p);
 }
 
+static void *test_realloc_fn(void *opaque, void *ptr, size_t old_size, size_t size) {
+  test_alloc *ta = opaque;
+  size_t *p = (size_t *)(void *)((char *)ptr - 16);
+  if (p[0] != old_size) {
+    fprintf(stderr, "realloc with size %zu of a block of %zu bytes\n", old_size, p[0]);
+    abort();
+  }
+  long call = ta->calls++;
+  if (ta->fail_at >= 0 && call == ta->fail_at) {
+    ta->failures++;
+    return NULL;
+  }
+  size_t *q = realloc(p, size + 16);
+  if (!q) return NULL;
+  q[0] = size;
+  ta->live_bytes = ta->live_bytes - old_size + size;
+  return (char *)q + 16;
+}
+
 nbs_allocator test_allocator(test_alloc *ta) {
-  nbs_allocator a = {test_alloc_fn, test_free_fn, ta};
+  nbs_allocator a = {test_alloc_fn, test_free_fn, ta, ta->with_realloc ? test_realloc_fn : NULL};
   return a;
 }

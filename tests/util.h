@@ -29,6 +29,7 @@ typedef struct test_alloc {
   size_t live_bytes;
   long fail_at;
   long failures;
+  int with_realloc; /* 1: the allocator offers realloc (counted and failed like alloc) */
 } test_alloc;
 nbs_allocator test_allocator(test_alloc *ta);
 

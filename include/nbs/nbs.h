@@ -113,15 +113,20 @@ typedef enum nbs_mode {
  * alloc returns NULL on failure (the library then returns NBS_ERR_NOMEM, leaks nothing and
  * leaves the context usable). free receives the size that was asked of alloc, and is
  * never called with NULL. Memory from alloc must be aligned for any C object (like malloc).
+ * realloc is optional (NULL: the library allocates, copies and frees); like C's realloc
+ * it returns NULL and leaves the block as it was on failure. The pair buffer grows with it,
+ * which for large buffers avoids holding the old and the new one at once (glibc remaps).
  */
 typedef struct nbs_allocator {
   void *(*alloc)(void *opaque, size_t size);
   void (*free)(void *opaque, void *ptr, size_t size);
   void *opaque;
+  void *(*realloc)(void *opaque, void *ptr, size_t old_size, size_t new_size);
 } nbs_allocator;
 
 typedef struct nbs_context_def {
-  /* Both functions NULL (the default): malloc and free. Both or neither must be set. */
+  /* alloc and free NULL (the default): malloc, realloc and free. alloc and free are set
+   * both or neither; realloc only with them. */
   nbs_allocator allocator;
   /* Largest number of bytes that arrays indexed by cell may take: screening's head array
    * (one int per cell) and NBS's per-axis head arrays. A detection that would pass it
