@@ -117,8 +117,10 @@ static FILE *cli_slurp_stdin(char **data) {
     if (got == 0) break;
   }
   *data = buf;
-  /* fmemopen of a zero-length buffer is not portable: give it one byte it never reads. */
-  return fmemopen(buf, n > 0 ? n : 1, "rb");
+  /* fmemopen of a zero-length buffer is not portable: an empty input is a one-byte buffer
+   * opened "w+", which truncates it to an empty stream (opened "rb", its byte, never
+   * written, would be read as the input). */
+  return n > 0 ? fmemopen(buf, n, "rb") : fmemopen(buf, 1, "w+b");
 }
 
 int cli_read(const char *path, const cli_read_opts *o, cli_elements *out, cli_format *format) {
@@ -128,7 +130,10 @@ int cli_read(const char *path, const cli_read_opts *o, cli_elements *out, cli_fo
   bool is_stdin = strcmp(path, "-") == 0;
   if (is_stdin) {
     f = cli_slurp_stdin(&stdin_data);
-    if (!f) return cli_fail(CLI_RESOURCE, "standard input: out of memory");
+    if (!f) {
+      free(stdin_data);
+      return cli_fail(CLI_RESOURCE, "standard input: out of memory");
+    }
     path = "<stdin>";
   } else {
     f = fopen(path, "rb");

@@ -35,8 +35,19 @@ typedef struct cli_dump {
   size_t len;
   long lineno;
   int64_t size, pos; /* file size and bytes consumed, for checking counts */
+  size_t last_len;   /* the last line read, without its '\n' */
+  bool last_eol;     /* ... ended with '\n' */
   cli_progress prog;
 } cli_dump;
+
+/* Where the file ends, for "the file ends ..." errors: the start of the line after the last
+ * '\n', or the end of a last line without one. */
+static long cli_dump_end_line(const cli_dump *d) {
+  return d->lineno == 0 || d->last_eol ? d->lineno + 1 : d->lineno;
+}
+static long cli_dump_end_column(const cli_dump *d) {
+  return d->lineno == 0 || d->last_eol ? 1 : (long)d->last_len + 1;
+}
 
 /* Next line into d->line (without its end); false at the end of the file. */
 static bool cli_dump_next(cli_dump *d) {
@@ -45,6 +56,8 @@ static bool cli_dump_next(cli_dump *d) {
   d->lineno++;
   d->pos += got;
   size_t len = (size_t)got;
+  d->last_eol = d->line[len - 1] == '\n';
+  d->last_len = d->last_eol ? len - 1 : len;
   while (len > 0 && (d->line[len - 1] == '\n' || d->line[len - 1] == '\r')) len--;
   d->line[len] = '\0';
   d->len = len;
@@ -167,7 +180,8 @@ static int cli_dump_read_box(cli_dump *d, cli_dump_box *b) {
   double bound[3][3] = {{0}};
   for (int a = 0; a < 3; a++) {
     if (!cli_dump_next(d)) {
-      return cli_input_error(d->path, d->lineno + 1, 1, "the file ends inside BOX BOUNDS");
+      return cli_input_error(d->path, cli_dump_end_line(d), cli_dump_end_column(d),
+                             "the file ends inside BOX BOUNDS");
     }
     char *tok[4];
     long col[4];
@@ -228,7 +242,7 @@ static int cli_dump_atoms(cli_dump *d, const cli_read_opts *o, int dim, const cl
   static const char *const what[3] = {"x", "y", "z"};
   for (int64_t k = 0; k < n && code == CLI_OK; k++) {
     if (!cli_dump_next(d)) {
-      code = cli_input_error(d->path, d->lineno + 1, 1,
+      code = cli_input_error(d->path, cli_dump_end_line(d), cli_dump_end_column(d),
                              "truncated: NUMBER OF ATOMS is %lld, the file ends after %lld atom "
                              "lines", (long long)n, (long long)k);
       break;
@@ -249,8 +263,14 @@ static int cli_dump_atoms(cli_dump *d, const cli_read_opts *o, int dim, const cl
                              more ? "more than " : "", got, c->ncols);
       break;
     }
+    /* Scaled x and y are unscaled with zs when the cell is tilted in z: then z is read in
+     * 2D too (--dim 2 gives the x and y of --dim 3). */
+    const int parsed = dim == 2 && c->coord[2] >= 0 &&
+                               ((c->scaled[0] && box->xz != 0) || (c->scaled[1] && box->yz != 0))
+                           ? 3
+                           : dim;
     double s[3] = {0, 0, 0};
-    for (int a = 0; a < dim && code == CLI_OK; a++) {
+    for (int a = 0; a < parsed && code == CLI_OK; a++) {
       int j = c->coord[a];
       char *end;
       s[a] = strtod(tok[j], &end);
@@ -328,7 +348,8 @@ int cli_read_dump(FILE *f, const char *path, const cli_read_opts *o, cli_element
     /* Optional items before the timestep. */
     if (strcmp(d.line, "ITEM: UNITS") == 0 || strcmp(d.line, "ITEM: TIME") == 0) {
       if (!cli_dump_next(&d)) {
-        code = cli_input_error(path, d.lineno + 1, 1, "the file ends after an ITEM line");
+        code = cli_input_error(path, cli_dump_end_line(&d), cli_dump_end_column(&d),
+                               "the file ends after an ITEM line");
         break;
       }
       continue;
@@ -409,7 +430,7 @@ int cli_read_dump(FILE *f, const char *path, const cli_read_opts *o, cli_element
     last_pos = start_pos;
     for (int64_t k = 0; k < n; k++) {
       if (!cli_dump_next(&d)) {
-        code = cli_input_error(path, d.lineno + 1, 1,
+        code = cli_input_error(path, cli_dump_end_line(&d), cli_dump_end_column(&d),
                                "truncated: NUMBER OF ATOMS is %lld, the file ends after %lld atom "
                                "lines", (long long)n, (long long)k);
         break;

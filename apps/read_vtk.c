@@ -546,11 +546,15 @@ int cli_read_vtk(FILE *f, const char *path, const cli_read_opts *o, cli_elements
                                        "'# vtk DataFile Version x.y'");
   }
   v.version = major;
+  /* At the end of the file, errors point at its end (not at lines it does not have). */
   if (!cli_vtk_rawline(&v, buf, sizeof buf)) {
-    return cli_input_error(path, 2, 1, "truncated: no title line");
+    return cli_input_error(path, v.line, v.col, "truncated: no title line");
   }
-  if (!cli_vtk_header(&v) || (!cli_vtk_is(&v, "ASCII") && !cli_vtk_is(&v, "BINARY"))) {
-    return cli_input_error(path, 3, 1, "the third line must be ASCII or BINARY");
+  if (!cli_vtk_header(&v)) {
+    return cli_input_error(path, v.line, v.col, "truncated: no ASCII or BINARY line");
+  }
+  if (!cli_vtk_is(&v, "ASCII") && !cli_vtk_is(&v, "BINARY")) {
+    return cli_input_error(path, v.hline, 1, "the third line must be ASCII or BINARY");
   }
   v.binary = cli_vtk_is(&v, "BINARY");
 

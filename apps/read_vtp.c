@@ -92,6 +92,10 @@ static int cli_vtp_error(const cli_vtp *x, size_t at, const char *fmt, ...) {
   va_start(ap, fmt);
   vsnprintf(msg, sizeof msg, fmt, ap);
   va_end(ap);
+  /* Names and excerpts come from the file: the message stays one line. */
+  for (char *m = msg; *m; m++) {
+    if ((unsigned char)*m < 0x20 || *m == 0x7f) *m = '?';
+  }
   return cli_input_error(x->path, line, col, "%s", msg);
 }
 
@@ -640,8 +644,10 @@ static int cli_vtp_values(cli_vtp *x, const cli_darray *d, int64_t count, double
       errno = 0;
       double v = strtod(s, &e);
       if (e == s || (e < end && !cli_vtp_space((unsigned char)*e))) {
-        return cli_vtp_error(x, (size_t)(s - (const char *)x->buf), "%s: '%.20s' is not a number",
-                             d->name, s);
+        int tl = 0; /* the token, up to 20 characters */
+        while (tl < 20 && s + tl < end && !cli_vtp_space((unsigned char)s[tl])) tl++;
+        return cli_vtp_error(x, (size_t)(s - (const char *)x->buf), "%s: '%.*s' is not a number",
+                             d->name, tl, s);
       }
       const char *p = check ? cli_value_problem(v, check == 2) : NULL;
       if (p) return cli_vtp_error(x, (size_t)(s - (const char *)x->buf), "%s %s", what, p);

@@ -337,9 +337,14 @@ static void fz_check_failure(const fz_file *f, const fz_result *r, const cli_rea
 
 static nbs_context *fz_ctx;
 
+static void fz_destroy_context(void) { nbs_context_destroy(fz_ctx); }
+
 static void fz_check_detect(const cli_elements *e) {
   if (e->n > FZ_DETECT_MAX) return;
-  if (!fz_ctx && nbs_context_create(NULL, &fz_ctx) != NBS_OK) FZ_FAIL("nbs_context_create");
+  if (!fz_ctx) {
+    if (nbs_context_create(NULL, &fz_ctx) != NBS_OK) FZ_FAIL("nbs_context_create");
+    atexit(fz_destroy_context);
+  }
   nbs_input in = {.dim = e->dim, .n = e->n, .coords = e->coords, .radii = e->radii,
                   .diameter = e->diameter};
   nbs_detect_def def = nbs_default_detect_def();

@@ -464,6 +464,11 @@ def reader_seeds():
     # Regression: a file of two lines was refused at line 3 (found by this target; fixed in
     # apps/read_vtk.c).
     seeds["vtk_no_third_line"] = ropts("vtk") + b"# vtk DataFile Version 2.0\ntitle"
+    seeds["vtk_binary_integers"] = ropts("vtk") + (
+        b"# vtk DataFile Version 3.0\ni\nBINARY\nDATASET POLYDATA\nPOINTS 2 short\n"
+        + struct.pack(">6h", -3, 0, 0, -2, 0, 0) + b"\nPOINT_DATA 2\nSCALARS radius unsigned_char\n"
+        b"LOOKUP_TABLE default\n\x01\x02\nTENSORS t vtktypeuint64\n" + bytes(144)
+        + b"\nTENSORS6 t6 unsigned_int\n" + bytes(48) + b"\nGLOBAL_IDS g long\n" + bytes(16) + b"\n")
     seeds["vtk_structured"] = ropts("vtk", diameter=True, both=False) + (
         b"# vtk DataFile Version 3.0\ng\nASCII\nDATASET STRUCTURED_GRID\nDIMENSIONS 2 1 1\n"
         b"POINTS 2 float\n0 0 0 1 0 0\n")
