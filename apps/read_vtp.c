@@ -408,6 +408,7 @@ static bool cli_bsrc_quantum(cli_bsrc *r) {
 
 /* Reads want bytes; false if the data ends first. */
 static bool cli_bsrc_read(cli_bsrc *r, unsigned char *dst, size_t want) {
+  if (want == 0) return true; /* dst may be NULL (an empty zlib block) */
   if (!r->b64) {
     if (want > r->n - r->pos) return false;
     memcpy(dst, r->s + r->pos, want);

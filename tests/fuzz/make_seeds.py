@@ -497,6 +497,16 @@ def reader_seeds():
     vtp = vtp_file(pts, rad, enc="binary").replace(b'Name="points"', b'Name="po\nints"', 1)
     head, tail = vtp.rsplit(b'format="binary">\n', 1)
     seeds["vtp_name_newline"] = ropts("vtp") + head + b'format="binary">\n!' + tail
+    # Regression: a zlib block of compressed size 0 was read with memcpy(NULL, ..., 0),
+    # undefined behaviour (found by this target; fixed in apps/read_vtp.c).
+    seeds["vtp_zlib_empty_block"] = ropts("vtp") + (
+        b'<?xml version="1.0"?>\n<VTKFile type="PolyData" version="1.0" '
+        b'byte_order="LittleEndian" compressor="vtkZLibDataCompressor">\n<PolyData>'
+        b'<Piece NumberOfPoints="1">\n<PointData><DataArray type="Float64" Name="radius" '
+        b'format="appended" offset="0"/></PointData>\n<Points><DataArray type="Float64" '
+        b'NumberOfComponents="3" format="appended" offset="16"/></Points>\n</Piece>'
+        b'</PolyData>\n<AppendedData encoding="raw">_' + struct.pack("<4I", 1, 8, 0, 0)
+        + b"".join(vtp_binary([0.0, 0.0, 0.0], "d", z=True)) + b"\n</AppendedData></VTKFile>\n")
     seeds["vtp_all_readers"] = ropts("all") + vtp_file(pts, rad, enc="ascii")
 
     # the format from the content, the name and standard input
