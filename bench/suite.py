@@ -30,7 +30,7 @@ PEERS = ["nanoflann", "cgal", "scipy", "lammps", "lammps-nosort"]
 ALL_TOOLS = ["nbs"] + PEERS
 COLUMNS = ["scene", "dim", "order", "N", "fraction", "spacing", "tool", "status", "seconds",
            "ns_per_element", "peak_bytes", "rss_extra_bytes", "work_bytes", "pair_bytes",
-           "pairs", "agree", "ran", "repeats", "threads", "hash", "note"]
+           "pairs", "agree", "ran", "repeats", "threads", "hash", "nbs_build", "note"]
 KEY = ("scene", "dim", "order", "N", "spacing", "tool")
 
 
@@ -65,6 +65,7 @@ class Suite:
         self.rows = []
         self.failures = []
         self.bin = a.build + "/bench"
+        self.build_id = nbs_build_id(a.build)
 
     # ---- running tools -------------------------------------------------------------------
     def run_cmd(self, cmd, tool_hint, timeout):
@@ -183,6 +184,7 @@ class Suite:
             row.update({k: r.get(k, "") for k in COLUMNS if k in r})
             row["tool"] = r["tool"]
             row["status"] = r.get("status", "failed")
+            row["nbs_build"] = self.build_id
             m = re.match(r"(nbs-.*)-\d+t$", r["tool"])
             one = next((x for x in results if m and x["tool"] == m.group(1)), None)
             if r["tool"].startswith("nbs-"):
@@ -250,6 +252,14 @@ def machine_name():
         pass
     slug = re.sub(r"[^a-z0-9]+", "-", model.lower()).strip("-")
     return f"{slug}-{os.cpu_count()}cpu"
+
+
+def nbs_build_id(build):
+    """The commit the drivers were built from, '+' when src/ or include/ had changes then.
+    Read at run time: close enough when bench/run has just built them."""
+    head = command_output(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"])
+    dirty = command_output(["git", "-C", ROOT, "status", "--porcelain", "--", "src", "include"])
+    return head + ("+" if dirty else "")
 
 
 def command_output(cmd):
