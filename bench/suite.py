@@ -380,10 +380,12 @@ def summary(rows, n_head):
         t.append(f"| {name} | {detail} | {mark} |")
 
     auto3, nbs3 = get("nbs-auto"), get("nbs-nbs")
+    target("auto <= 50 ns/element (3D)", None if auto3 is None else auto3 <= 50,
+           f"auto {f(auto3)} ns")
     for lm in ("lammps", "lammps-nosort"):
         l3 = get(lm)
-        target(f"auto <= 50 ns/element, >= 6x {lm} (3D)",
-               None if auto3 is None or l3 is None else (auto3 <= 50 and l3 / auto3 >= 6),
+        target(f"auto >= 6x {lm} (3D)",
+               None if auto3 is None or l3 is None else l3 / auto3 >= 6,
                f"auto {f(auto3)} ns, {lm} {f(l3)} ns, ratio "
                f"{f'{l3 / auto3:.2f}' if auto3 and l3 else 'n/a'}")
     sc = get("scipy")
@@ -641,6 +643,8 @@ def main(argv):
     ap.add_argument("--no-plots", action="store_true")
     ap.add_argument("--keep-files", action="store_true")
     ap.add_argument("--head-n", type=float, default=1e6, help="N of the headline table")
+    ap.add_argument("--summary-only", action="store_true",
+                    help="run nothing: rewrite summary.md and the plots from results.csv")
     ap.add_argument("-v", "--verbose", action="store_true")
     a = ap.parse_args(argv)
     a.argv = argv
@@ -668,6 +672,15 @@ def main(argv):
         a.out = (tempfile.mkdtemp(prefix="nbs-bench-smoke-") if a.smoke else
                  os.path.join(HERE, "results", a.machine or machine_name()))
     os.makedirs(a.out, exist_ok=True)
+    if a.summary_only:
+        rows = load_rows(os.path.join(a.out, "results.csv"))
+        with open(os.path.join(a.out, "summary.md"), "w") as f:
+            f.write(f"From {os.path.basename(a.out)}/results.csv (measured by the builds in its "
+                    f"nbs_build column; machine.txt); regenerate with bench/run.\n\n")
+            f.write(summary(rows, a.head_n))
+        made = [] if a.no_plots else plots(rows, a.out)
+        log(f"wrote summary.md {' '.join(made)} in {a.out}")
+        return 0
     own_workdir = a.workdir is None
     if own_workdir:
         a.workdir = tempfile.mkdtemp(prefix="nbs-bench-scenes-")
