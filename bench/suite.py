@@ -255,8 +255,12 @@ def machine_name():
 
 
 def nbs_build_id(build):
-    """The commit the drivers were built from, '+' when src/ or include/ had changes then.
-    Read at run time: close enough when bench/run has just built them."""
+    """The commit the drivers were built from, '+' when src/ or include/ had changes then:
+    written by bench/run after building; else the work tree's state now."""
+    try:
+        return open(os.path.join(build, "nbs_build_id")).read().strip()
+    except OSError:
+        pass
     head = command_output(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"])
     dirty = command_output(["git", "-C", ROOT, "status", "--porcelain", "--", "src", "include"])
     return head + ("+" if dirty else "")
