@@ -108,20 +108,6 @@ static scene det_scene(det_kind kind, int dim, int64_t n, double box, double off
   return s;
 }
 
-static scene lib_scene(scene_kind kind, int dim, int64_t n) {
-  scene_def def = scene_default_def();
-  def.kind = kind;
-  def.dim = dim;
-  def.n = n;
-  scene s;
-  char err[200];
-  if (scene_generate(&def, &s, err, sizeof err) != 0) {
-    fprintf(stderr, "scene: %s\n", err);
-    abort();
-  }
-  return s;
-}
-
 /* ---- the fixed scenes ---------------------------------------------------------------- */
 
 typedef struct det_case {
@@ -141,10 +127,10 @@ static scene make_case(size_t c) {
   const int dim = cases[c].dim;
   switch (c) {
   case 0:
-  case 1: return lib_scene(SCENE_LATTICE, dim, 1000);
+  case 1: return test_scene(SCENE_LATTICE, dim, 1000, 0.5);
   case 2:
-  case 3: return lib_scene(SCENE_FACES, dim, 1000);
-  case 4: return lib_scene(SCENE_IDENTICAL, dim, 200);
+  case 3: return test_scene(SCENE_FACES, dim, 1000, 0.5);
+  case 4: return test_scene(SCENE_IDENTICAL, dim, 200, 0.5);
   case 5: return det_scene(DET_UNIFORM, dim, 3000, 50.0, 0.0, 11);
   case 6: return det_scene(DET_UNIFORM, dim, 4000, 14.0, 0.0, 12);
   case 7: return det_scene(DET_QUANTIZED, dim, 3000, 40.0, 0.0, 13);

@@ -9,23 +9,9 @@
 
 #include <math.h>
 
-static scene make_scene(scene_kind kind, int dim, int64_t n) {
-  scene_def def = scene_default_def();
-  def.kind = kind;
-  def.dim = dim;
-  def.n = n;
-  scene s;
-  char err[200];
-  if (scene_generate(&def, &s, err, sizeof err) != 0) {
-    fprintf(stderr, "scene: %s\n", err);
-    abort();
-  }
-  return s;
-}
-
 /* After an error: the next correct detection agrees with direct. */
 static void check_usable(nbs_context *ctx) {
-  scene s = make_scene(SCENE_UNIFORM, 3, 300);
+  scene s = test_scene(SCENE_UNIFORM, 3, 300, 0.5);
   pair_list ref, got;
   ASSERT_OK(detect_sorted(ctx, &s, NBS_DIRECT, NBS_MODE_CONTACTS, &ref));
   ASSERT_OK(detect_sorted(ctx, &s, NBS_NBS, NBS_MODE_CONTACTS, &got));
@@ -41,7 +27,7 @@ static void test_null_and_ranges(void) {
   nbs_context *ctx;
   CHECK_STATUS(nbs_context_create(NULL, NULL), NBS_ERR_NULL);
   ASSERT_OK(nbs_context_create(NULL, &ctx));
-  scene s = make_scene(SCENE_UNIFORM, 3, 100);
+  scene s = test_scene(SCENE_UNIFORM, 3, 100, 0.5);
   nbs_input in = scene_input(&s);
   CHECK_STATUS(nbs_detect(NULL, &in, NULL), NBS_ERR_NULL);
   CHECK_STATUS(nbs_detect(ctx, NULL, NULL), NBS_ERR_NULL);
@@ -88,7 +74,7 @@ static void test_bad_numbers(void) {
   ASSERT_OK(nbs_context_create(NULL, &ctx));
   const double bads[] = {NAN, INFINITY, -INFINITY};
   for (int dim = 2; dim <= 3; dim++) {
-    scene s = make_scene(SCENE_UNIFORM, dim, 100);
+    scene s = test_scene(SCENE_UNIFORM, dim, 100, 0.5);
     nbs_input in = scene_input(&s);
     for (int b = 0; b < 3; b++) {
       for (int axis = 0; axis < dim; axis++) {
@@ -137,7 +123,7 @@ static void test_budget_extent(void) {
   cdef.cell_budget = 4096;
   nbs_context *ctx;
   ASSERT_OK(nbs_context_create(&cdef, &ctx));
-  scene s = make_scene(SCENE_SPARSE, 3, 2000);
+  scene s = test_scene(SCENE_SPARSE, 3, 2000, 0.5);
   nbs_input in = scene_input(&s);
   nbs_detect_def def = nbs_default_detect_def();
   def.algorithm = NBS_SCREENING;
@@ -156,7 +142,7 @@ static void test_budget_extent(void) {
 
   /* A domain wider than any grid: screening and NBS say so; sorting and auto succeed. */
   ASSERT_OK(nbs_context_create(NULL, &ctx));
-  s = make_scene(SCENE_FAR, 3, 500);
+  s = test_scene(SCENE_FAR, 3, 500, 0.5);
   in = scene_input(&s);
   def.algorithm = NBS_SCREENING;
   CHECK_STATUS(nbs_detect(ctx, &in, &def), NBS_ERR_EXTENT);
@@ -185,7 +171,7 @@ static int stop_after_two(void *user, const nbs_pair *pairs, size_t count) {
 }
 
 static void test_pair_limits(void) {
-  scene s = make_scene(SCENE_IDENTICAL, 3, 300); /* 44850 pairs */
+  scene s = test_scene(SCENE_IDENTICAL, 3, 300, 0.5); /* 44850 pairs */
   nbs_input in = scene_input(&s);
   for (int a = 0; a < NBS_ALGORITHM_COUNT; a++) {
     nbs_context_def cdef = nbs_default_context_def();
@@ -240,8 +226,8 @@ static int count_pairs(void *user, const nbs_pair *pairs, size_t count) {
  * sink: NBS_ERR_NOMEM each time, nothing leaked, and the context then correct. */
 static void test_allocation_failure(void) {
   for (int dim = 2; dim <= 3; dim++) {
-    scene s = make_scene(SCENE_IDENTICAL, dim, 120); /* 7140 pairs: the buffer grows */
-    scene u = make_scene(SCENE_UNIFORM, dim, 800);
+    scene s = test_scene(SCENE_IDENTICAL, dim, 120, 0.5); /* 7140 pairs: the buffer grows */
+    scene u = test_scene(SCENE_UNIFORM, dim, 800, 0.5);
     for (int a = 0; a < NBS_ALGORITHM_COUNT; a++) {
       for (int sink = 0; sink < 4; sink++) { /* bit 0: callback; bit 1: allocator's realloc */
         for (int scn = 0; scn < 2; scn++) {

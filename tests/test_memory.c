@@ -6,18 +6,6 @@
 #include "test.h"
 #include "util.h"
 
-static scene make_scene(scene_kind kind, int dim, int64_t n, double fraction) {
-  scene_def def = scene_default_def();
-  def.kind = kind;
-  def.dim = dim;
-  def.n = n;
-  def.fraction = fraction;
-  scene s;
-  char err[200];
-  if (scene_generate(&def, &s, err, sizeof err) != 0) abort();
-  return s;
-}
-
 /* NBS: 2D ny + 2nx + 2N integers (eq. 3.65), 3D nz + 2ny + 2nx + 3N (eq. 3.80); the padding
  * cells on each side of each head array are the fixed overhead. */
 static void test_nbs_formula(void) {
@@ -25,7 +13,7 @@ static void test_nbs_formula(void) {
   for (int dim = 2; dim <= 3; dim++) {
     for (int f = 0; f < 3; f++) {
       for (int64_t n = 1000; n <= 64000; n *= 4) {
-        scene s = make_scene(SCENE_UNIFORM, dim, n, fractions[f]);
+        scene s = test_scene(SCENE_UNIFORM, dim, n, fractions[f]);
         nbs_context *ctx;
         ASSERT_OK(nbs_context_create(NULL, &ctx));
         nbs_input in = scene_input(&s);
@@ -56,7 +44,7 @@ static void test_sorting_formula(void) {
   const scene_kind kinds[] = {SCENE_UNIFORM, SCENE_SPARSE, SCENE_FAR, SCENE_HUGE};
   for (int dim = 2; dim <= 3; dim++) {
     for (int k = 0; k < 4; k++) {
-      scene s = make_scene(kinds[k], dim, 20000, 0.5);
+      scene s = test_scene(kinds[k], dim, 20000, 0.5);
       nbs_context *ctx;
       ASSERT_OK(nbs_context_create(NULL, &ctx));
       nbs_input in = scene_input(&s);
@@ -78,7 +66,7 @@ static void test_sorting_formula(void) {
 /* Screening: one head per cell (with padding) and a next per element. */
 static void test_screening_cells(void) {
   for (int dim = 2; dim <= 3; dim++) {
-    scene s = make_scene(SCENE_UNIFORM, dim, 5000, 0.3);
+    scene s = test_scene(SCENE_UNIFORM, dim, 5000, 0.3);
     nbs_context *ctx;
     ASSERT_OK(nbs_context_create(NULL, &ctx));
     nbs_input in = scene_input(&s);
@@ -103,7 +91,7 @@ static void test_no_allocation_after_first(void) {
   const nbs_algorithm algos[] = {NBS_AUTO,    NBS_DIRECT, NBS_SCREENING,
                                  NBS_SORTING, NBS_NBS,    NBS_CELLSORT};
   for (int dim = 2; dim <= 3; dim++) {
-    scene s = make_scene(SCENE_UNIFORM, dim, 6000, 0.5);
+    scene s = test_scene(SCENE_UNIFORM, dim, 6000, 0.5);
     for (size_t a = 0; a < sizeof algos / sizeof *algos; a++) {
       for (int mode = 0; mode < 2; mode++) {
         test_alloc ta = {0, 0, 0, -1, 0, 0};
@@ -138,7 +126,7 @@ static void test_no_allocation_after_first(void) {
 /* nbs_context_reserve makes even the first detection allocation-free (sorting's layout
  * depends only on N). */
 static void test_reserve(void) {
-  scene s = make_scene(SCENE_UNIFORM, 3, 4000, 0.5);
+  scene s = test_scene(SCENE_UNIFORM, 3, 4000, 0.5);
   test_alloc ta = {0, 0, 0, -1, 0, 0};
   nbs_context_def cdef = nbs_default_context_def();
   cdef.allocator = test_allocator(&ta);

@@ -15,6 +15,21 @@ nbs_input scene_input(const scene *s) {
   return in;
 }
 
+scene test_scene(scene_kind kind, int dim, int64_t n, double fraction) {
+  scene_def def = scene_default_def();
+  def.kind = kind;
+  def.dim = dim;
+  def.n = n;
+  def.fraction = fraction;
+  scene s;
+  char err[200];
+  if (scene_generate(&def, &s, err, sizeof err) != 0) {
+    fprintf(stderr, "scene: %s\n", err);
+    abort();
+  }
+  return s;
+}
+
 nbs_status detect_sorted(nbs_context *ctx, const scene *s, nbs_algorithm algo, nbs_mode mode,
                          pair_list *out) {
   out->p = NULL;

@@ -21,6 +21,8 @@ bool pair_lists_equal(const pair_list *a, const pair_list *b);
 /* True when every pair of sub is in super (both sorted). */
 bool pair_list_contains(const pair_list *super, const pair_list *sub);
 nbs_input scene_input(const scene *s);
+/* A scene of the shared library (seed 1, diameter 1); aborts if it cannot be made. */
+scene test_scene(scene_kind kind, int dim, int64_t n, double fraction);
 
 /* A test allocator: counts live allocations and bytes, and fails the allocation numbered
  * fail_at (0-based count since reset), or none when fail_at < 0. */
