@@ -34,20 +34,35 @@
 #if defined(_OPENMP)
 #include <omp.h>
 #endif
-#if defined(__SSE2__)
-#include <emmintrin.h>
+#include <stdlib.h>
+/* The AVX-512 kernel needs a compiler that can target it (GCC and clang on x86-64); the
+ * processor is asked at run time. */
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define NBS__CS_AVX512 1
+#define NBS__CS_AVX512_TARGET __attribute__((target("avx512f,avx512vl,avx512dq,popcnt")))
+#include <immintrin.h>
+#else
+#define NBS__CS_AVX512 0
 #endif
 
 #define NBS__RADIX_BITS 11
-/* Entries after the end of the key array, read by NBS__CS_ADVANCE. */
-#define NBS__CS_PAD 4
+/* Entries after the end of the key array, read by NBS__CS_ADVANCE: the keys it compares at
+ * once. */
+#define NBS__CS_PAD 16
 /* Sub-cells per cell edge on the x axis: a power of two, so that scaling is exact; fewer
  * when the key would not fit 64 bits otherwise. */
 #define NBS__CS_FINE_BITS 3
 
-typedef struct nbs__cs {
+typedef struct nbs__cs nbs__cs;
+/* A block kernel (see below). */
+typedef size_t (*nbs__cs_block_fn)(const nbs__cs *c, int32_t c0, int lanes, int32_t q0,
+                                   int32_t q1, bool tri, nbs_pair *out);
+
+struct nbs__cs {
   nbs__run *run;
   int dim;
+  bool contacts;
+  nbs__cs_block_fn block;
   int32_t n;
   uint64_t *key;
   int32_t *idx;
@@ -57,7 +72,7 @@ typedef struct nbs__cs {
   int64_t nx, ny, nz;
   int bx, by;     /* bits of the key for the x sub-cell and for iy (iz takes the rest) */
   uint64_t fine;  /* sub-cells per cell edge on x */
-} nbs__cs;
+};
 
 /* Number of bits needed for values < count (count >= 1). */
 static int nbs__bits(uint64_t count) {
@@ -182,120 +197,216 @@ static nbs_status nbs__sink_one(nbs__sink *s, nbs_pair one) {
   return NBS_OK;
 }
 
-/* Tests element p against the elements [q0, q1) and writes the pairs that pass (all of them
- * in candidate mode) to out, without a branch on the test: the pair is always written and
- * the count moves on only if it passes. The caller has made room for q1 - q0 pairs.
- * The expression is the contract's, term for term as in nbs__touch, so that every
- * algorithm decides every tie the same way. */
+/* ---- the block kernels --------------------------------------------------------------
+ * The sweep tests a block of up to NBS__CS_LANES consecutive elements of a row (the "i"
+ * elements, one per lane) against each element q of a range (the "j" elements): one q
+ * against all lanes at once. A kernel writes the pairs that pass (all of them in candidate
+ * mode) in the order (q, lane), whatever the instruction set, so every kernel gives the same
+ * bytes. The test is the contract's expression, term for term as in nbs__touch, lane by
+ * lane, without fused multiply-adds, so that every algorithm decides every tie the same way.
+ * With tri, the range is the block itself and lane l only meets q > c0 + l (each pair of the
+ * block once). A kernel may write up to NBS__CS_LANES pairs past the ones it keeps; the
+ * caller makes room for them. */
+#define NBS__CS_LANES 8
+
+/* The generic kernel: plain C, one lane after another. */
 static inline __attribute__((always_inline)) size_t
-nbs__cs_kernel(const nbs__cs *c, int dim, bool radii, bool contacts, int32_t p, int32_t q0,
-               int32_t q1, nbs_pair *out) {
-  const double *X = c->xs, *Y = c->ys, *Z = c->zs;
+nbs__cs_block_body(const nbs__cs *c, int dim, bool radii, bool contacts, int32_t c0, int lanes,
+                   int32_t q0, int32_t q1, bool tri, nbs_pair *out) {
+  const double *X = c->xs, *Y = c->ys, *Z = c->zs, *R = c->rs;
   const int32_t *idx = c->idx;
-  const double px = X[p], py = Y[p], pz = dim == 3 ? Z[p] : 0.0;
-  const double rp = radii ? c->rs[p] : 0.0;
   const double d2 = c->d2;
-  const int32_t ip = idx[p];
   size_t m = 0;
-#if defined(__SSE2__)
-  /* Two candidates per step with SSE2: the same IEEE operations as the scalar code, lane
-   * by lane (no fused multiply-add), so every tie is decided the same way. Windows end
-   * before p, so reading one element past a window's end stays inside the arrays; that
-   * lane is masked off. */
-  const __m128d PX = _mm_set1_pd(px), PY = _mm_set1_pd(py), PZ = _mm_set1_pd(pz);
-  const __m128d RP = _mm_set1_pd(rp), LIM = _mm_set1_pd(d2);
-  for (int32_t q = q0; q < q1; q += 2) {
-    __m128d dx = _mm_sub_pd(PX, _mm_loadu_pd(X + q)), dy = _mm_sub_pd(PY, _mm_loadu_pd(Y + q));
-    __m128d d = _mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy));
-    if (dim == 3) {
-      __m128d dz = _mm_sub_pd(PZ, _mm_loadu_pd(Z + q));
-      d = _mm_add_pd(d, _mm_mul_pd(dz, dz));
-    }
-    __m128d lim = LIM;
-    if (radii) {
-      __m128d rr = _mm_add_pd(RP, _mm_loadu_pd(c->rs + q));
-      lim = _mm_mul_pd(rr, rr);
-    }
-    int hit = contacts ? _mm_movemask_pd(_mm_cmple_pd(d, lim)) : 3;
-    hit &= q + 1 < q1 ? 3 : 1;
-    int32_t a0 = idx[q], a1 = idx[q + 1];
-    nbs_pair pr;
-    pr.i = ip < a0 ? ip : a0;
-    pr.j = ip < a0 ? a0 : ip;
-    out[m] = pr;
-    m += (size_t)(hit & 1);
-    pr.i = ip < a1 ? ip : a1;
-    pr.j = ip < a1 ? a1 : ip;
-    out[m] = pr;
-    m += (size_t)(hit >> 1);
-  }
-#else
   for (int32_t q = q0; q < q1; q++) {
-    double dx = px - X[q], dy = py - Y[q];
-    double d = dx * dx + dy * dy;
-    if (dim == 3) {
-      double dz = pz - Z[q];
-      d += dz * dz;
+    const double qx = X[q], qy = Y[q], qz = dim == 3 ? Z[q] : 0.0, rq = radii ? R[q] : 0.0;
+    const int32_t iq = idx[q];
+    const int end = tri ? (int)(q - c0) : lanes;
+    for (int l = 0; l < end; l++) {
+      const int32_t p = c0 + l;
+      double dx = X[p] - qx, dy = Y[p] - qy;
+      double d = dx * dx + dy * dy;
+      if (dim == 3) {
+        double dz = Z[p] - qz;
+        d += dz * dz;
+      }
+      double lim = d2;
+      if (radii) {
+        double rr = R[p] + rq;
+        lim = rr * rr;
+      }
+      const int32_t ip = idx[p];
+      nbs_pair pr;
+      pr.i = ip < iq ? ip : iq;
+      pr.j = ip < iq ? iq : ip;
+      out[m] = pr;
+      m += (size_t)(!contacts || d <= lim);
     }
-    double lim = d2;
-    if (radii) {
-      double rr = rp + c->rs[q];
-      lim = rr * rr;
-    }
-    int32_t iq = idx[q];
-    nbs_pair pr;
-    pr.i = ip < iq ? ip : iq;
-    pr.j = ip < iq ? iq : ip;
-    out[m] = pr;
-    m += (size_t)(!contacts || d <= lim);
   }
-#endif
   return m;
 }
 
-/* Offers p against [q0, q1) into the sink: through the kernel when there is room, else
- * pair by pair (a callback's batch smaller than the range, or max_pairs in reach). */
+#define NBS__CS_DISPATCH(body, c, ...)                                                         \
+  (c->dim == 3 ? (c->rs ? (c->contacts ? body(c, 3, true, true, __VA_ARGS__)                   \
+                                       : body(c, 3, true, false, __VA_ARGS__))                 \
+                        : (c->contacts ? body(c, 3, false, true, __VA_ARGS__)                  \
+                                       : body(c, 3, false, false, __VA_ARGS__)))               \
+               : (c->rs ? (c->contacts ? body(c, 2, true, true, __VA_ARGS__)                   \
+                                       : body(c, 2, true, false, __VA_ARGS__))                 \
+                        : (c->contacts ? body(c, 2, false, true, __VA_ARGS__)                  \
+                                       : body(c, 2, false, false, __VA_ARGS__))))
+
+static size_t nbs__cs_block_generic(const nbs__cs *c, int32_t c0, int lanes, int32_t q0,
+                                    int32_t q1, bool tri, nbs_pair *out) {
+  return NBS__CS_DISPATCH(nbs__cs_block_body, c, c0, lanes, q0, q1, tri, out);
+}
+
+#if NBS__CS_AVX512
+/* The AVX-512 kernel: the block's lanes in one register per coordinate, each q broadcast;
+ * the lanes that pass are packed by a compress and stored at once, so the kernel has no
+ * branch but the loop's. Chosen at run time when the processor has AVX-512 (F, VL, DQ). */
+static inline __attribute__((always_inline)) NBS__CS_AVX512_TARGET size_t
+nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int32_t c0,
+                      int lanes, int32_t q0, int32_t q1, bool tri, nbs_pair *out) {
+  const double *X = c->xs, *Y = c->ys, *Z = c->zs, *R = c->rs;
+  const int32_t *idx = c->idx;
+  const __mmask8 im = (__mmask8)((1u << lanes) - 1);
+  const __m512d PX = _mm512_maskz_loadu_pd(im, X + c0), PY = _mm512_maskz_loadu_pd(im, Y + c0);
+  const __m512d PZ = dim == 3 ? _mm512_maskz_loadu_pd(im, Z + c0) : _mm512_setzero_pd();
+  const __m512d PR = radii ? _mm512_maskz_loadu_pd(im, R + c0) : _mm512_setzero_pd();
+  const __m512d LIM = _mm512_set1_pd(c->d2);
+  const __m256i IP = _mm256_maskz_loadu_epi32(im, idx + c0);
+  size_t m = 0;
+  for (int32_t q = q0; q < q1; q++) {
+    __m512d dx = _mm512_sub_pd(PX, _mm512_set1_pd(X[q]));
+    __m512d dy = _mm512_sub_pd(PY, _mm512_set1_pd(Y[q]));
+    __m512d d = _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy));
+    if (dim == 3) {
+      __m512d dz = _mm512_sub_pd(PZ, _mm512_set1_pd(Z[q]));
+      d = _mm512_add_pd(d, _mm512_mul_pd(dz, dz));
+    }
+    __m512d lim = LIM;
+    if (radii) {
+      __m512d rr = _mm512_add_pd(PR, _mm512_set1_pd(R[q]));
+      lim = _mm512_mul_pd(rr, rr);
+    }
+    const __mmask8 lm = tri ? (__mmask8)((1u << (q - c0)) - 1) : im;
+    const __mmask8 hit = contacts ? _mm512_mask_cmp_pd_mask(lm, d, lim, _CMP_LE_OQ) : lm;
+    const __m256i IQ = _mm256_set1_epi32(idx[q]);
+    const __m512i lo = _mm512_cvtepu32_epi64(_mm256_min_epi32(IP, IQ));
+    const __m512i hi = _mm512_cvtepu32_epi64(_mm256_max_epi32(IP, IQ));
+    const __m512i pr = _mm512_or_si512(lo, _mm512_slli_epi64(hi, 32)); /* {i, j} in memory */
+    _mm512_storeu_si512((void *)(out + m), _mm512_maskz_compress_epi64(hit, pr));
+    m += (size_t)__builtin_popcount(hit);
+  }
+  return m;
+}
+
+NBS__CS_AVX512_TARGET
+static size_t nbs__cs_block_avx512(const nbs__cs *c, int32_t c0, int lanes, int32_t q0,
+                                   int32_t q1, bool tri, nbs_pair *out) {
+  return NBS__CS_DISPATCH(nbs__cs_block512_body, c, c0, lanes, q0, q1, tri, out);
+}
+#endif
+
+/* The kernel this process uses: AVX-512 where the processor has it, unless the environment
+ * variable NBS_SIMD is "generic" (read once per context, for tests and comparisons). */
+int nbs__cellsort_simd(void) {
+#if NBS__CS_AVX512
+  const char *e = getenv("NBS_SIMD");
+  if (e && strcmp(e, "generic") == 0) return 0;
+  __builtin_cpu_init();
+  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+      __builtin_cpu_supports("avx512dq")) {
+    return 1;
+  }
+#endif
+  return 0;
+}
+
+/* Offers the block [c0, c0 + lanes) against [q0, q1) (tri: the block itself) into the sink:
+ * through the kernel, in slices of at most NBS__CS_SLICE elements so that the room asked of
+ * the sink stays small, or pair by pair when there is no room (a callback's batch smaller
+ * than a slice, or max_pairs in reach). */
+#define NBS__CS_SLICE 256
 static inline __attribute__((always_inline)) nbs_status
-nbs__cs_range(const nbs__cs *c, nbs__sink *s, int dim, bool radii, bool contacts, int32_t p,
-              int32_t q0, int32_t q1) {
-  size_t need = (size_t)(q1 - q0) + 1; /* the kernel may write one pair more than it keeps */
-  s->candidates += (size_t)(q1 - q0);
-  if (s->cap - s->count < need) {
-    /* The slow path works on a copy, so that the sweep's sink, whose address never
-     * escapes, can live in registers. */
-    nbs__sink t = *s;
-    bool room;
-    nbs_status st = nbs__sink_room(&t, need, &room);
-    if (st == NBS_OK && !room) {
-      for (int32_t q = q0; q < q1 && st == NBS_OK; q++) {
-        nbs_pair one[2]; /* the kernel may write one more than it keeps */
-        if (nbs__cs_kernel(c, dim, radii, contacts, p, q, q + 1, one)) st = nbs__sink_one(&t, one[0]);
+nbs__cs_range(const nbs__cs *c, nbs__sink *s, int32_t c0, int lanes, int32_t q0, int32_t q1,
+              bool tri) {
+  if (tri) {
+    s->candidates += (uint64_t)lanes * (uint64_t)(lanes - 1) / 2;
+  } else {
+    s->candidates += (uint64_t)lanes * (uint64_t)(q1 - q0);
+  }
+  while (q0 < q1) {
+    const int32_t q2 = q1 - q0 > NBS__CS_SLICE ? q0 + NBS__CS_SLICE : q1;
+    const size_t need = (size_t)(q2 - q0) * (size_t)lanes + NBS__CS_LANES;
+    if (s->cap - s->count < need) {
+      /* The slow path works on a copy, so that the sweep's sink, whose address never
+       * escapes, can live in registers. */
+      nbs__sink t = *s;
+      bool room;
+      nbs_status st = nbs__sink_room(&t, need, &room);
+      if (st == NBS_OK && !room) {
+        for (int32_t q = q0; q < q2 && st == NBS_OK; q++) {
+          nbs_pair some[2 * NBS__CS_LANES];
+          size_t k = c->block(c, c0, lanes, q, q + 1, tri, some);
+          for (size_t u = 0; u < k && st == NBS_OK; u++) st = nbs__sink_one(&t, some[u]);
+        }
+        *s = t;
+        NBS__TRY(st);
+        q0 = q2;
+        continue;
       }
       *s = t;
-      return st;
+      NBS__TRY(st);
     }
-    *s = t;
-    NBS__TRY(st);
+    const size_t m = c->block(c, c0, lanes, q0, q2, tri, s->buf + s->count);
+    s->count += m;
+    s->emitted += m;
+    q0 = q2;
   }
-  size_t m = nbs__cs_kernel(c, dim, radii, contacts, p, q0, q1, s->buf + s->count);
-  s->count += m;
-  s->emitted += m;
   return NBS_OK;
 }
 
-/* Moves a window's edge q forwards while key[q] OP bound. Edges mostly move by 0 to 3
- * places, in no pattern a branch predictor learns, and each step of a plain loop waits for
- * the load before it. So four keys are compared at once, without a branch (the keys are
- * sorted: the count of those that pass is the step), and only a step of four loops. The
- * key array has NBS__CS_PAD entries of UINT64_MAX after the end, never below a bound. */
-#define NBS__CS_ADVANCE(key, q, OP, bound)                                                    \
+/* Window edges. An edge q moves forwards while key[q] < bound (or <= bound). Edges move by
+ * a few places per block, in no pattern a branch predictor learns, and each step of a plain
+ * loop waits for the load before it. So sixteen keys are compared at once, without a branch
+ * (the keys are sorted: the count of those that pass is the step), and only a step of
+ * sixteen loops. The key array has NBS__CS_PAD entries of UINT64_MAX after the end, never
+ * below a bound. A counter returns how many of key[0..16) pass. */
+typedef int32_t (*nbs__cs_count_fn)(const uint64_t *key, uint64_t bound);
+
+static inline int32_t nbs__cs_below(const uint64_t *key, uint64_t bound) {
+  int32_t n = 0;
+  for (int i = 0; i < NBS__CS_PAD; i++) n += key[i] < bound;
+  return n;
+}
+static inline int32_t nbs__cs_upto(const uint64_t *key, uint64_t bound) {
+  int32_t n = 0;
+  for (int i = 0; i < NBS__CS_PAD; i++) n += key[i] <= bound;
+  return n;
+}
+#if NBS__CS_AVX512
+static inline NBS__CS_AVX512_TARGET int32_t nbs__cs_below512(const uint64_t *key, uint64_t bound) {
+  const __m512i b = _mm512_set1_epi64((long long)bound);
+  const unsigned m0 = _mm512_cmplt_epu64_mask(_mm512_loadu_si512((const void *)key), b);
+  const unsigned m1 = _mm512_cmplt_epu64_mask(_mm512_loadu_si512((const void *)(key + 8)), b);
+  return __builtin_popcount(m0 | m1 << 8);
+}
+static inline NBS__CS_AVX512_TARGET int32_t nbs__cs_upto512(const uint64_t *key, uint64_t bound) {
+  const __m512i b = _mm512_set1_epi64((long long)bound);
+  const unsigned m0 = _mm512_cmple_epu64_mask(_mm512_loadu_si512((const void *)key), b);
+  const unsigned m1 = _mm512_cmple_epu64_mask(_mm512_loadu_si512((const void *)(key + 8)), b);
+  return __builtin_popcount(m0 | m1 << 8);
+}
+#endif
+
+#define NBS__CS_ADVANCE(key, q, count, bound)                                                 \
   do {                                                                                        \
     int32_t nbs__step;                                                                        \
     do {                                                                                      \
-      nbs__step = ((key)[(q)] OP(bound)) + ((key)[(q) + 1] OP(bound)) +                       \
-                  ((key)[(q) + 2] OP(bound)) + ((key)[(q) + 3] OP(bound));                    \
+      nbs__step = count((key) + (q), (bound));                                                \
       (q) += nbs__step;                                                                       \
-    } while (nbs__step == 4);                                                                 \
+    } while (nbs__step == NBS__CS_PAD);                                                       \
   } while (0)
 
 /* The lower bound of `k` in key[0, hi). */
@@ -310,15 +421,20 @@ static int32_t nbs__cs_lower(const uint64_t *key, int32_t hi, uint64_t k) {
 }
 
 /* Sweeps the rows that start in [from, to) of the cell order (from and to on row
- * boundaries). Each element p of a central row is checked against the elements before it
- * in its own row within one cell edge in x, and against the elements of each neighbouring
- * row of the half mask within one cell edge either side in x. On the x axis the key counts
- * sub-cells of edge / fine (8 unless the key needs the bits), so these windows hug
- * |dx| <= edge: about 9 cell volumes are searched per element instead of 13.5. Every window only
- * moves forwards, so finding them costs O(1) per element and row. */
+ * boundaries). Each row is cut into blocks of NBS__CS_LANES consecutive elements. A block
+ * meets itself, the elements before it in its own row within one cell edge in x of its first
+ * element, and a window of each neighbouring row of the half mask: the elements within one
+ * cell edge in x either side of the block. On the x axis the key counts sub-cells of
+ * edge / fine (8 unless the key needs the bits), so these windows hug the block. Every
+ * window only moves forwards, so finding them costs O(1) per block and row; the kernel then
+ * tests one window element against the whole block at once. */
 static inline __attribute__((always_inline)) nbs_status
-nbs__cs_sweep_rows(const nbs__cs *c, nbs__sink *s, int dim, bool radii, int32_t from, int32_t to) {
-  const bool contacts = c->run->mode == NBS_MODE_CONTACTS;
+nbs__cs_sweep_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
+                   nbs__cs_count_fn below, nbs__cs_count_fn upto) {
+  nbs__sink local = *out; /* kept in registers, written back at the end */
+  nbs__sink *s = &local;
+  nbs_status st = NBS_OK;
+  const int dim = c->dim;
   const uint64_t *key = c->key;
   const int bx = c->bx, by = c->by;
   const uint64_t mx = ((uint64_t)1 << bx) - 1, my = ((uint64_t)1 << by) - 1;
@@ -329,61 +445,69 @@ nbs__cs_sweep_rows(const nbs__cs *c, nbs__sink *s, int dim, bool radii, int32_t 
   static const int row_dy[4] = {-1, -1, 0, 1}, row_dz[4] = {0, -1, -1, -1};
   int32_t cur[4] = {-1, -1, -1, -1};
   int32_t a = from;
-  while (a < to) {
+  while (a < to && st == NBS_OK) {
     const uint64_t row = key[a] >> bx;
     int32_t b = a + 1;
     while (b < to && key[b] >> bx == row) b++;
     const int64_t iy = (int64_t)(row & my), iz = (int64_t)(row >> by);
-
-    /* own row: the elements before p, from fx - fine on */
-    int32_t w = a;
-    for (int32_t p = a; p < b; p++) {
-      const uint64_t k = key[p], fx = k & mx;
-      const uint64_t lo = k - (fx < fine ? fx : fine);
-      NBS__CS_ADVANCE(key, w, <, lo);
-      NBS__TRY(nbs__cs_range(c, s, dim, radii, contacts, p, w, p));
-    }
-    /* each neighbouring row: a window of fx - fine .. fx + fine */
+    /* the neighbouring rows: their first element (or -1: empty or outside) */
+    uint64_t base[4];
+    int32_t q0[4], q1[4];
     for (int r = 0; r < rows; r++) {
+      q0[r] = -1;
       const int64_t y = iy + row_dy[r], z = iz + row_dz[r];
       if (y < 0 || y >= ny || z < 0) continue;
-      const uint64_t trow = (uint64_t)z << by | (uint64_t)y, base = trow << bx;
+      const uint64_t trow = (uint64_t)z << by | (uint64_t)y;
+      base[r] = trow << bx;
       int32_t q = cur[r];
-      if (q < 0) q = nbs__cs_lower(key, a, base); /* first use: search, then forwards */
-      NBS__CS_ADVANCE(key, q, <, base); /* stops at a at the latest: key[a] >> bx > trow */
+      if (q < 0) q = nbs__cs_lower(key, a, base[r]); /* first use: search, then forwards */
+      NBS__CS_ADVANCE(key, q, below, base[r]); /* stops at a at the latest: key[a] >> bx > trow */
       cur[r] = q;
-      if (key[q] >> bx != trow) continue; /* the row is empty */
-      int32_t q0 = q, q1 = q;
-      for (int32_t p = a; p < b; p++) {
-        const uint64_t fx = key[p] & mx;
-        const uint64_t lo = base + (fx > fine ? fx - fine : 0);
-        const uint64_t hi = base + (mx - fx > fine ? fx + fine : mx);
+      if (key[q] >> bx == trow) q0[r] = q1[r] = q;
+    }
+    int32_t w = a;
+    for (int32_t c0 = a; c0 < b && st == NBS_OK; c0 += NBS__CS_LANES) {
+      const int lanes = b - c0 < NBS__CS_LANES ? (int)(b - c0) : NBS__CS_LANES;
+      const uint64_t fa = key[c0] & mx, fb = key[c0 + lanes - 1] & mx;
+      /* own row: the elements before the block, from fa - fine on; the block itself */
+      NBS__CS_ADVANCE(key, w, below, key[c0] - (fa < fine ? fa : fine));
+      if (w < c0) st = nbs__cs_range(c, s, c0, lanes, w, c0, false);
+      if (lanes > 1 && st == NBS_OK) st = nbs__cs_range(c, s, c0, lanes, c0 + 1, c0 + lanes, true);
+      /* each neighbouring row: a window of fa - fine .. fb + fine */
+      for (int r = 0; r < rows && st == NBS_OK; r++) {
+        if (q0[r] < 0) continue;
+        const uint64_t lo = base[r] + (fa > fine ? fa - fine : 0);
+        const uint64_t hi = base[r] + (mx - fb > fine ? fb + fine : mx);
         /* both stop at a at the latest: key[a] > base + mx */
-        NBS__CS_ADVANCE(key, q0, <, lo);
-        if (q1 < q0) q1 = q0;
-        NBS__CS_ADVANCE(key, q1, <=, hi);
-        if (q1 > q0) NBS__TRY(nbs__cs_range(c, s, dim, radii, contacts, p, q0, q1));
+        NBS__CS_ADVANCE(key, q0[r], below, lo);
+        if (q1[r] < q0[r]) q1[r] = q0[r];
+        NBS__CS_ADVANCE(key, q1[r], upto, hi);
+        if (q1[r] > q0[r]) st = nbs__cs_range(c, s, c0, lanes, q0[r], q1[r], false);
       }
     }
     a = b;
   }
-  return NBS_OK;
-}
-
-/* The sweep on a local copy of the sink (kept in registers), written back at the end. */
-static inline __attribute__((always_inline)) nbs_status
-nbs__cs_sweep(const nbs__cs *c, nbs__sink *s, int dim, bool radii, int32_t from, int32_t to) {
-  nbs__sink local = *s;
-  nbs_status st = nbs__cs_sweep_rows(c, &local, dim, radii, from, to);
-  *s = local;
+  *out = local;
   return st;
 }
 
-static nbs_status nbs__cs_sweep_any(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to) {
-  if (c->dim == 3) {
-    return c->rs ? nbs__cs_sweep(c, s, 3, true, from, to) : nbs__cs_sweep(c, s, 3, false, from, to);
-  }
-  return c->rs ? nbs__cs_sweep(c, s, 2, true, from, to) : nbs__cs_sweep(c, s, 2, false, from, to);
+/* The sweep, compiled twice: with the plain counters, and for AVX-512 with the vector ones
+ * (the function pointers are constants, so the compiler inlines them). */
+static nbs_status nbs__cs_sweep_generic(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to) {
+  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below, nbs__cs_upto);
+}
+#if NBS__CS_AVX512
+NBS__CS_AVX512_TARGET
+static nbs_status nbs__cs_sweep_avx512(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to) {
+  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below512, nbs__cs_upto512);
+}
+#endif
+
+static nbs_status nbs__cs_sweep(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to) {
+#if NBS__CS_AVX512
+  if (c->run->ctx->simd) return nbs__cs_sweep_avx512(c, out, from, to);
+#endif
+  return nbs__cs_sweep_generic(c, out, from, to);
 }
 
 #if defined(_OPENMP)
@@ -457,6 +581,11 @@ nbs_status nbs__cellsort(nbs__run *run) {
   c.rs = run->r ? (double *)(void *)(w + key_b + idx_b + xs_b) : NULL;
   uint32_t *hist = (uint32_t *)(void *)(w + key_b + idx_b + xs_b + rs_b);
   c.d2 = run->d2;
+  c.contacts = run->mode == NBS_MODE_CONTACTS;
+  c.block = nbs__cs_block_generic;
+#if NBS__CS_AVX512
+  if (ctx->simd) c.block = nbs__cs_block_avx512;
+#endif
   c.nx = nx;
   c.ny = ny;
   c.nz = nz;
@@ -518,7 +647,7 @@ nbs_status nbs__cellsort(nbs__run *run) {
     }
   }
   if (threads == 1) {
-    sinks[0].status = nbs__cs_sweep_any(&c, &sinks[0], 0, n);
+    sinks[0].status = nbs__cs_sweep(&c, &sinks[0], 0, n);
   } else {
 #if defined(_OPENMP)
 #pragma omp parallel num_threads(threads)
@@ -526,7 +655,7 @@ nbs_status nbs__cellsort(nbs__run *run) {
       int t = omp_get_thread_num();
       int32_t from = nbs__cs_row_start(&c, nbs__chunk(n, t, threads));
       int32_t to = nbs__cs_row_start(&c, nbs__chunk(n, t + 1, threads));
-      sinks[t].status = nbs__cs_sweep_any(&c, &sinks[t], from, to);
+      sinks[t].status = nbs__cs_sweep(&c, &sinks[t], from, to);
     }
 #endif
   }

@@ -271,6 +271,7 @@ nbs_status nbs_context_create(const nbs_context_def *def, nbs_context **out) {
   ctx->cell_budget = d.cell_budget;
   ctx->max_pairs = d.max_pairs;
   ctx->threads = d.threads;
+  ctx->simd = nbs__cellsort_simd();
   ctx->bytes = ctx->peak_bytes = sizeof *ctx;
   ctx->error_element = -1;
   *out = ctx;

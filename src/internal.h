@@ -93,6 +93,8 @@ struct nbs_context {
   /* Threads (cellsort): the number asked for (0: OpenMP's default), and each extra
    * thread's pair list, kept between detections. */
   int threads;
+  /* cellsort's kernel: 1 for AVX-512, 0 for the generic one (nbs__cellsort_simd) */
+  int simd;
   nbs_pair *tpairs[NBS__THREADS_MAX];
   size_t tcap[NBS__THREADS_MAX];
 
@@ -213,6 +215,9 @@ nbs_status nbs__nbs(nbs__run *run);
 nbs_status nbs__cellsort(nbs__run *run);
 /* True when cellsort's 64-bit cell key can index the grid (auto's test). */
 bool nbs__cellsort_fits(const nbs__grid *g);
+/* Which kernel cellsort uses in this process: 1 (AVX-512) or 0 (generic); the environment
+ * variable NBS_SIMD=generic asks for the generic one. */
+int nbs__cellsort_simd(void);
 
 /* Work-block layouts, for work_kind. */
 enum { NBS__WORK_NONE = 0, NBS__WORK_SCREENING = 1, NBS__WORK_SORTING = 2, NBS__WORK_NBS = 3,
