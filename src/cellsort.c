@@ -46,6 +46,8 @@
 #endif
 
 #define NBS__RADIX_BITS 11
+/* How far ahead the gather prefetches. */
+#define NBS__CS_AHEAD 16
 /* Entries after the end of the key array, read by NBS__CS_ADVANCE: the keys it compares at
  * once. */
 #define NBS__CS_PAD 16
@@ -55,8 +57,9 @@
 
 typedef struct nbs__cs nbs__cs;
 /* A block kernel (see below). */
-typedef size_t (*nbs__cs_block_fn)(const nbs__cs *c, int32_t c0, int lanes, int32_t q0,
-                                   int32_t q1, bool tri, nbs_pair *out);
+typedef struct nbs__cs_ranges nbs__cs_ranges;
+typedef size_t (*nbs__cs_block_fn)(const nbs__cs *c, int32_t c0, int lanes,
+                                   const nbs__cs_ranges *rg, nbs_pair *out);
 
 struct nbs__cs {
   nbs__run *run;
@@ -199,47 +202,57 @@ static nbs_status nbs__sink_one(nbs__sink *s, nbs_pair one) {
 
 /* ---- the block kernels --------------------------------------------------------------
  * The sweep tests a block of up to NBS__CS_LANES consecutive elements of a row (the "i"
- * elements, one per lane) against each element q of a range (the "j" elements): one q
- * against all lanes at once. A kernel writes the pairs that pass (all of them in candidate
- * mode) in the order (q, lane), whatever the instruction set, so every kernel gives the same
- * bytes. The test is the contract's expression, term for term as in nbs__touch, lane by
- * lane, without fused multiply-adds, so that every algorithm decides every tie the same way.
- * With tri, the range is the block itself and lane l only meets q > c0 + l (each pair of the
- * block once). A kernel may write up to NBS__CS_LANES pairs past the ones it keeps; the
- * caller makes room for them. */
+ * elements, one per lane) against each element q of a few ranges (the "j" elements): one q
+ * against all lanes at once. The ranges come in key order, all before the block's end: a
+ * q before the block meets every lane, and a q inside the block meets the lanes before it
+ * (each pair of the block once). A kernel writes the pairs that pass (all of them in
+ * candidate mode) in the order (q, lane), whatever the instruction set, so every kernel
+ * gives the same bytes. The test is the contract's expression, term for term as in
+ * nbs__touch, lane by lane, without fused multiply-adds, so that every algorithm decides
+ * every tie the same way. A kernel may write up to NBS__CS_LANES pairs past the ones it
+ * keeps; the caller makes room for them. */
 #define NBS__CS_LANES 8
+/* The most ranges a block meets: four neighbouring rows and its own. */
+#define NBS__CS_RANGES 5
+
+struct nbs__cs_ranges {
+  int count;
+  int32_t q0[NBS__CS_RANGES], q1[NBS__CS_RANGES];
+};
 
 /* The generic kernel: plain C, one lane after another. */
 static inline __attribute__((always_inline)) size_t
 nbs__cs_block_body(const nbs__cs *c, int dim, bool radii, bool contacts, int32_t c0, int lanes,
-                   int32_t q0, int32_t q1, bool tri, nbs_pair *out) {
+                   const nbs__cs_ranges *rg, nbs_pair *out) {
   const double *X = c->xs, *Y = c->ys, *Z = c->zs, *R = c->rs;
   const int32_t *idx = c->idx;
   const double d2 = c->d2;
   size_t m = 0;
-  for (int32_t q = q0; q < q1; q++) {
-    const double qx = X[q], qy = Y[q], qz = dim == 3 ? Z[q] : 0.0, rq = radii ? R[q] : 0.0;
-    const int32_t iq = idx[q];
-    const int end = tri ? (int)(q - c0) : lanes;
-    for (int l = 0; l < end; l++) {
-      const int32_t p = c0 + l;
-      double dx = X[p] - qx, dy = Y[p] - qy;
-      double d = dx * dx + dy * dy;
-      if (dim == 3) {
-        double dz = Z[p] - qz;
-        d += dz * dz;
+  for (int r = 0; r < rg->count; r++) {
+    for (int32_t q = rg->q0[r]; q < rg->q1[r]; q++) {
+      const double qx = X[q], qy = Y[q], qz = dim == 3 ? Z[q] : 0.0, rq = radii ? R[q] : 0.0;
+      const int32_t iq = idx[q];
+      const int end = q < c0 ? lanes : (int)(q - c0);
+      for (int l = 0; l < end; l++) {
+        const int32_t p = c0 + l;
+        double dx = X[p] - qx, dy = Y[p] - qy;
+        double d = dx * dx + dy * dy;
+        if (dim == 3) {
+          double dz = Z[p] - qz;
+          d += dz * dz;
+        }
+        double lim = d2;
+        if (radii) {
+          double rr = R[p] + rq;
+          lim = rr * rr;
+        }
+        const int32_t ip = idx[p];
+        nbs_pair pr;
+        pr.i = ip < iq ? ip : iq;
+        pr.j = ip < iq ? iq : ip;
+        out[m] = pr;
+        m += (size_t)(!contacts || d <= lim);
       }
-      double lim = d2;
-      if (radii) {
-        double rr = R[p] + rq;
-        lim = rr * rr;
-      }
-      const int32_t ip = idx[p];
-      nbs_pair pr;
-      pr.i = ip < iq ? ip : iq;
-      pr.j = ip < iq ? iq : ip;
-      out[m] = pr;
-      m += (size_t)(!contacts || d <= lim);
     }
   }
   return m;
@@ -255,18 +268,18 @@ nbs__cs_block_body(const nbs__cs *c, int dim, bool radii, bool contacts, int32_t
                         : (c->contacts ? body(c, 2, false, true, __VA_ARGS__)                  \
                                        : body(c, 2, false, false, __VA_ARGS__))))
 
-static size_t nbs__cs_block_generic(const nbs__cs *c, int32_t c0, int lanes, int32_t q0,
-                                    int32_t q1, bool tri, nbs_pair *out) {
-  return NBS__CS_DISPATCH(nbs__cs_block_body, c, c0, lanes, q0, q1, tri, out);
+static size_t nbs__cs_block_generic(const nbs__cs *c, int32_t c0, int lanes,
+                                    const nbs__cs_ranges *rg, nbs_pair *out) {
+  return NBS__CS_DISPATCH(nbs__cs_block_body, c, c0, lanes, rg, out);
 }
 
 #if NBS__CS_AVX512
 /* The AVX-512 kernel: the block's lanes in one register per coordinate, each q broadcast;
  * the lanes that pass are packed by a compress and stored at once, so the kernel has no
- * branch but the loop's. Chosen at run time when the processor has AVX-512 (F, VL, DQ). */
+ * branch but the loops'. Chosen at run time when the processor has AVX-512 (F, VL, DQ). */
 static inline __attribute__((always_inline)) NBS__CS_AVX512_TARGET size_t
 nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int32_t c0,
-                      int lanes, int32_t q0, int32_t q1, bool tri, nbs_pair *out) {
+                      int lanes, const nbs__cs_ranges *rg, nbs_pair *out) {
   const double *X = c->xs, *Y = c->ys, *Z = c->zs, *R = c->rs;
   const int32_t *idx = c->idx;
   const __mmask8 im = (__mmask8)((1u << lanes) - 1);
@@ -276,35 +289,37 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int3
   const __m512d LIM = _mm512_set1_pd(c->d2);
   const __m256i IP = _mm256_maskz_loadu_epi32(im, idx + c0);
   size_t m = 0;
-  for (int32_t q = q0; q < q1; q++) {
-    __m512d dx = _mm512_sub_pd(PX, _mm512_set1_pd(X[q]));
-    __m512d dy = _mm512_sub_pd(PY, _mm512_set1_pd(Y[q]));
-    __m512d d = _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy));
-    if (dim == 3) {
-      __m512d dz = _mm512_sub_pd(PZ, _mm512_set1_pd(Z[q]));
-      d = _mm512_add_pd(d, _mm512_mul_pd(dz, dz));
+  for (int r = 0; r < rg->count; r++) {
+    for (int32_t q = rg->q0[r]; q < rg->q1[r]; q++) {
+      __m512d dx = _mm512_sub_pd(PX, _mm512_set1_pd(X[q]));
+      __m512d dy = _mm512_sub_pd(PY, _mm512_set1_pd(Y[q]));
+      __m512d d = _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy));
+      if (dim == 3) {
+        __m512d dz = _mm512_sub_pd(PZ, _mm512_set1_pd(Z[q]));
+        d = _mm512_add_pd(d, _mm512_mul_pd(dz, dz));
+      }
+      __m512d lim = LIM;
+      if (radii) {
+        __m512d rr = _mm512_add_pd(PR, _mm512_set1_pd(R[q]));
+        lim = _mm512_mul_pd(rr, rr);
+      }
+      const __mmask8 lm = q < c0 ? im : (__mmask8)((1u << (q - c0)) - 1);
+      const __mmask8 hit = contacts ? _mm512_mask_cmp_pd_mask(lm, d, lim, _CMP_LE_OQ) : lm;
+      const __m256i IQ = _mm256_set1_epi32(idx[q]);
+      const __m512i lo = _mm512_cvtepu32_epi64(_mm256_min_epi32(IP, IQ));
+      const __m512i hi = _mm512_cvtepu32_epi64(_mm256_max_epi32(IP, IQ));
+      const __m512i pr = _mm512_or_si512(lo, _mm512_slli_epi64(hi, 32)); /* {i, j} in memory */
+      _mm512_storeu_si512((void *)(out + m), _mm512_maskz_compress_epi64(hit, pr));
+      m += (size_t)__builtin_popcount(hit);
     }
-    __m512d lim = LIM;
-    if (radii) {
-      __m512d rr = _mm512_add_pd(PR, _mm512_set1_pd(R[q]));
-      lim = _mm512_mul_pd(rr, rr);
-    }
-    const __mmask8 lm = tri ? (__mmask8)((1u << (q - c0)) - 1) : im;
-    const __mmask8 hit = contacts ? _mm512_mask_cmp_pd_mask(lm, d, lim, _CMP_LE_OQ) : lm;
-    const __m256i IQ = _mm256_set1_epi32(idx[q]);
-    const __m512i lo = _mm512_cvtepu32_epi64(_mm256_min_epi32(IP, IQ));
-    const __m512i hi = _mm512_cvtepu32_epi64(_mm256_max_epi32(IP, IQ));
-    const __m512i pr = _mm512_or_si512(lo, _mm512_slli_epi64(hi, 32)); /* {i, j} in memory */
-    _mm512_storeu_si512((void *)(out + m), _mm512_maskz_compress_epi64(hit, pr));
-    m += (size_t)__builtin_popcount(hit);
   }
   return m;
 }
 
 NBS__CS_AVX512_TARGET
-static size_t nbs__cs_block_avx512(const nbs__cs *c, int32_t c0, int lanes, int32_t q0,
-                                   int32_t q1, bool tri, nbs_pair *out) {
-  return NBS__CS_DISPATCH(nbs__cs_block512_body, c, c0, lanes, q0, q1, tri, out);
+static size_t nbs__cs_block_avx512(const nbs__cs *c, int32_t c0, int lanes,
+                                   const nbs__cs_ranges *rg, nbs_pair *out) {
+  return NBS__CS_DISPATCH(nbs__cs_block512_body, c, c0, lanes, rg, out);
 }
 #endif
 
@@ -323,47 +338,56 @@ int nbs__cellsort_simd(void) {
   return 0;
 }
 
-/* Offers the block [c0, c0 + lanes) against [q0, q1) (tri: the block itself) into the sink:
- * through the kernel, in slices of at most NBS__CS_SLICE elements so that the room asked of
- * the sink stays small, or pair by pair when there is no room (a callback's batch smaller
- * than a slice, or max_pairs in reach). */
+/* Offers the block [c0, c0 + lanes) against its ranges into the sink: in one call of the
+ * kernel when they hold at most NBS__CS_SLICE elements and the sink has room, else range by
+ * range in slices of at most NBS__CS_SLICE elements (so that the room asked of the sink
+ * stays small), or pair by pair when there is no room (a callback's batch smaller than a
+ * slice, or max_pairs in reach). */
 #define NBS__CS_SLICE 256
-static inline __attribute__((always_inline)) nbs_status
-nbs__cs_range(const nbs__cs *c, nbs__sink *s, int32_t c0, int lanes, int32_t q0, int32_t q1,
-              bool tri) {
-  if (tri) {
-    s->candidates += (uint64_t)lanes * (uint64_t)(lanes - 1) / 2;
-  } else {
-    s->candidates += (uint64_t)lanes * (uint64_t)(q1 - q0);
-  }
-  while (q0 < q1) {
-    const int32_t q2 = q1 - q0 > NBS__CS_SLICE ? q0 + NBS__CS_SLICE : q1;
-    const size_t need = (size_t)(q2 - q0) * (size_t)lanes + NBS__CS_LANES;
-    if (s->cap - s->count < need) {
-      /* The slow path works on a copy, so that the sweep's sink, whose address never
-       * escapes, can live in registers. */
-      nbs__sink t = *s;
-      bool room;
-      nbs_status st = nbs__sink_room(&t, need, &room);
-      if (st == NBS_OK && !room) {
-        for (int32_t q = q0; q < q2 && st == NBS_OK; q++) {
+static nbs_status nbs__cs_offer_slices(const nbs__cs *c, nbs__sink *s, int32_t c0, int lanes,
+                                       const nbs__cs_ranges *rg) {
+  for (int r = 0; r < rg->count; r++) {
+    for (int32_t q0 = rg->q0[r]; q0 < rg->q1[r];) {
+      nbs__cs_ranges one = {1, {q0}, {rg->q1[r] - q0 > NBS__CS_SLICE ? q0 + NBS__CS_SLICE : rg->q1[r]}};
+      const size_t need = (size_t)(one.q1[0] - q0) * (size_t)lanes + NBS__CS_LANES;
+      bool room = true;
+      if (s->cap - s->count < need) NBS__TRY(nbs__sink_room(s, need, &room));
+      if (room) {
+        const size_t m = c->block(c, c0, lanes, &one, s->buf + s->count);
+        s->count += m;
+        s->emitted += m;
+      } else {
+        for (int32_t q = q0; q < one.q1[0]; q++) {
           nbs_pair some[2 * NBS__CS_LANES];
-          size_t k = c->block(c, c0, lanes, q, q + 1, tri, some);
-          for (size_t u = 0; u < k && st == NBS_OK; u++) st = nbs__sink_one(&t, some[u]);
+          nbs__cs_ranges single = {1, {q}, {q + 1}};
+          size_t k = c->block(c, c0, lanes, &single, some);
+          for (size_t u = 0; u < k; u++) NBS__TRY(nbs__sink_one(s, some[u]));
         }
-        *s = t;
-        NBS__TRY(st);
-        q0 = q2;
-        continue;
       }
-      *s = t;
-      NBS__TRY(st);
+      q0 = one.q1[0];
     }
-    const size_t m = c->block(c, c0, lanes, q0, q2, tri, s->buf + s->count);
-    s->count += m;
-    s->emitted += m;
-    q0 = q2;
   }
+  return NBS_OK;
+}
+
+static inline __attribute__((always_inline)) nbs_status
+nbs__cs_offer(const nbs__cs *c, nbs__sink *s, int32_t c0, int lanes, const nbs__cs_ranges *rg) {
+  size_t total = 0;
+  for (int r = 0; r < rg->count; r++) total += (size_t)(rg->q1[r] - rg->q0[r]);
+  /* the block's own pairs are counted as lanes (lanes - 1) / 2, not lanes * lanes */
+  s->candidates += (uint64_t)lanes * total - (uint64_t)lanes * (uint64_t)(lanes + 1) / 2;
+  const size_t need = total * (size_t)lanes + NBS__CS_LANES;
+  if (total > NBS__CS_SLICE || s->cap - s->count < need) {
+    /* The slow path works on a copy, so that the sweep's sink, whose address never
+     * escapes, can live in registers. */
+    nbs__sink t = *s;
+    nbs_status st = nbs__cs_offer_slices(c, &t, c0, lanes, rg);
+    *s = t;
+    return st;
+  }
+  const size_t m = c->block(c, c0, lanes, rg, s->buf + s->count);
+  s->count += m;
+  s->emitted += m;
   return NBS_OK;
 }
 
@@ -440,9 +464,10 @@ nbs__cs_sweep_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
   const uint64_t mx = ((uint64_t)1 << bx) - 1, my = ((uint64_t)1 << by) - 1;
   const uint64_t fine = c->fine;
   const int64_t ny = c->ny;
-  /* the rows of the half mask, (dy, dz): (-1, 0) in 2D; (-1, 0) (-1, -1) (0, -1) (1, -1) in 3D */
+  /* the rows of the half mask, (dy, dz), in key order: (-1, 0) in 2D; (-1, -1) (0, -1)
+   * (1, -1) (-1, 0) in 3D */
   const int rows = dim == 3 ? 4 : 1;
-  static const int row_dy[4] = {-1, -1, 0, 1}, row_dz[4] = {0, -1, -1, -1};
+  static const int row_dy[2][4] = {{-1}, {-1, 0, 1, -1}}, row_dz[2][4] = {{0}, {-1, -1, -1, 0}};
   int32_t cur[4] = {-1, -1, -1, -1};
   int32_t a = from;
   while (a < to && st == NBS_OK) {
@@ -455,7 +480,7 @@ nbs__cs_sweep_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
     int32_t q0[4], q1[4];
     for (int r = 0; r < rows; r++) {
       q0[r] = -1;
-      const int64_t y = iy + row_dy[r], z = iz + row_dz[r];
+      const int64_t y = iy + row_dy[dim - 2][r], z = iz + row_dz[dim - 2][r];
       if (y < 0 || y >= ny || z < 0) continue;
       const uint64_t trow = (uint64_t)z << by | (uint64_t)y;
       base[r] = trow << bx;
@@ -469,12 +494,10 @@ nbs__cs_sweep_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
     for (int32_t c0 = a; c0 < b && st == NBS_OK; c0 += NBS__CS_LANES) {
       const int lanes = b - c0 < NBS__CS_LANES ? (int)(b - c0) : NBS__CS_LANES;
       const uint64_t fa = key[c0] & mx, fb = key[c0 + lanes - 1] & mx;
-      /* own row: the elements before the block, from fa - fine on; the block itself */
-      NBS__CS_ADVANCE(key, w, below, key[c0] - (fa < fine ? fa : fine));
-      if (w < c0) st = nbs__cs_range(c, s, c0, lanes, w, c0, false);
-      if (lanes > 1 && st == NBS_OK) st = nbs__cs_range(c, s, c0, lanes, c0 + 1, c0 + lanes, true);
+      nbs__cs_ranges rg;
+      rg.count = 0;
       /* each neighbouring row: a window of fa - fine .. fb + fine */
-      for (int r = 0; r < rows && st == NBS_OK; r++) {
+      for (int r = 0; r < rows; r++) {
         if (q0[r] < 0) continue;
         const uint64_t lo = base[r] + (fa > fine ? fa - fine : 0);
         const uint64_t hi = base[r] + (mx - fb > fine ? fb + fine : mx);
@@ -482,8 +505,16 @@ nbs__cs_sweep_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
         NBS__CS_ADVANCE(key, q0[r], below, lo);
         if (q1[r] < q0[r]) q1[r] = q0[r];
         NBS__CS_ADVANCE(key, q1[r], upto, hi);
-        if (q1[r] > q0[r]) st = nbs__cs_range(c, s, c0, lanes, q0[r], q1[r], false);
+        rg.q0[rg.count] = q0[r];
+        rg.q1[rg.count] = q1[r];
+        rg.count += q1[r] > q0[r];
       }
+      /* own row: the elements before the block from fa - fine on, and the block itself */
+      NBS__CS_ADVANCE(key, w, below, key[c0] - (fa < fine ? fa : fine));
+      rg.q0[rg.count] = w;
+      rg.q1[rg.count] = c0 + lanes;
+      rg.count++;
+      st = nbs__cs_offer(c, s, c0, lanes, &rg);
     }
     a = b;
   }
@@ -623,6 +654,9 @@ nbs_status nbs__cellsort(nbs__run *run) {
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
 #endif
   for (int32_t p = 0; p < n; p++) {
+    /* ask for an element a few iterations ahead: the reads are random */
+    const int32_t ahead = c.idx[p + NBS__CS_AHEAD < n ? p + NBS__CS_AHEAD : p];
+    __builtin_prefetch(x + (size_t)ahead * (size_t)dim);
     const double *xk = x + (size_t)c.idx[p] * (size_t)dim;
     c.xs[p] = xk[0];
     c.ys[p] = xk[1];
