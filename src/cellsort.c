@@ -12,13 +12,21 @@
  *   2. LSD radix sort of (key, element) by the key's significant bits only, in as few
  *      passes of at most 11 bits as they need; the scatter of each pass writes into at most
  *      2^11 sequential streams, which caches handle well;
- *   3. gather the coordinates (and radii) in cell order: the last random access;
- *   4. sweep the rows in key order. For each element, the half mask is a window of its own
- *      row (the elements before it within one edge in x) and a window of each neighbouring
- *      row (within one edge either side in x: one row in 2D, four in 3D). Each window's
- *      edges only move forwards as the sweep advances: no binary search (but once per
- *      thread), no cell array, no hash. The sub-cells make the windows hug |dx| <= edge,
- *      so about 9 cell volumes are searched per element instead of 13.5.
+ *   3. gather the coordinates (and radii) in cell order, prefetching a few elements ahead:
+ *      the last random access;
+ *   4. sweep the rows in key order, in blocks of 8 consecutive elements of a row. A block
+ *      meets a few ranges of the cell order: itself and the elements before it in its own
+ *      row within one edge in x, and a window of each neighbouring row of the half mask
+ *      (within one edge in x either side of the block: one row in 2D, four in 3D). Each
+ *      window's edges only move forwards as the sweep advances, sixteen keys compared at a
+ *      time: no binary search (but once per thread), no cell array, no hash. The kernel then
+ *      tests one element of the ranges against the whole block at once: with AVX-512 (chosen
+ *      at run time) that is one instruction per operation of the distance test for 8 pairs,
+ *      and a compress that stores the pairs found without a branch. Per element that is
+ *      about 5 kernel steps and 5/8 of a window update in 3D, instead of 9 candidate tests
+ *      and 5 window updates, each ending in a mispredicted branch, for one element at a time
+ *      (measured at N = 1e6, one thread: the sweep went from 60 to 22 ns per element).
+ *      The generic kernel, for other processors, gives the same bytes in the same order.
  * Memory: 8 (key) + 4 (element) + 8 * dim (coordinates) bytes per element, + 8 with radii:
  * 36 B per element in 3D, whatever the extent of the domain. The radix sort's scratch lives
  * in the coordinate array before the gather.
