@@ -30,8 +30,8 @@ scene test_scene(scene_kind kind, int dim, int64_t n, double fraction) {
   return s;
 }
 
-nbs_status detect_sorted(nbs_context *ctx, const scene *s, nbs_algorithm algo, nbs_mode mode,
-                         pair_list *out) {
+nbs_status detect_raw(nbs_context *ctx, const scene *s, nbs_algorithm algo, nbs_mode mode,
+                      pair_list *out) {
   out->p = NULL;
   out->count = 0;
   nbs_input in = scene_input(s);
@@ -46,8 +46,14 @@ nbs_status detect_sorted(nbs_context *ctx, const scene *s, nbs_algorithm algo, n
   if (!out->p) abort();
   if (count) memcpy(out->p, p, count * sizeof *p);
   out->count = count;
-  nbs_sort_pairs(out->p, count);
   return NBS_OK;
+}
+
+nbs_status detect_sorted(nbs_context *ctx, const scene *s, nbs_algorithm algo, nbs_mode mode,
+                         pair_list *out) {
+  nbs_status st = detect_raw(ctx, s, algo, mode, out);
+  if (st == NBS_OK) nbs_sort_pairs(out->p, out->count);
+  return st;
 }
 
 void pair_list_free(pair_list *l) {

@@ -13,7 +13,11 @@ typedef struct pair_list {
   size_t count;
 } pair_list;
 
-/* Runs one detection and copies its pairs, sorted. Returns the status. */
+/* Runs one detection and copies its pairs in the algorithm's order (not sorted), in a
+ * malloc'ed list. Returns the status. */
+nbs_status detect_raw(nbs_context *ctx, const scene *s, nbs_algorithm algo, nbs_mode mode,
+                      pair_list *out);
+/* The same, the pairs sorted. */
 nbs_status detect_sorted(nbs_context *ctx, const scene *s, nbs_algorithm algo, nbs_mode mode,
                          pair_list *out);
 void pair_list_free(pair_list *l);
