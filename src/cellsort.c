@@ -223,6 +223,8 @@ static nbs_status nbs__sink_one(nbs__sink *s, nbs_pair one) {
 #define NBS__CS_LANES 8
 /* The most ranges a block meets: four neighbouring rows and its own. */
 #define NBS__CS_RANGES 5
+/* The most range elements one kernel call meets (nbs__cs_offer slices longer ranges). */
+#define NBS__CS_SLICE 256
 
 struct nbs__cs_ranges {
   int count;
@@ -296,32 +298,47 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int3
   const __m512d PZ = dim == 3 ? _mm512_maskz_loadu_pd(im, Z + c0) : _mm512_setzero_pd();
   const __m512d PR = radii ? _mm512_maskz_loadu_pd(im, R + c0) : _mm512_setzero_pd();
   const __m512d LIM = _mm512_set1_pd(c->d2);
-  const __m256i IP = _mm256_maskz_loadu_epi32(im, idx + c0);
+  /* each lane's element twice, {ip, ip}: a pair {min, max} is then one min of all 16 int32
+   * and one max of the odd ones, already in nbs_pair's layout */
+  const __m512i IP2 = _mm512_permutexvar_epi32(
+      _mm512_set_epi32(7, 7, 6, 6, 5, 5, 4, 4, 3, 3, 2, 2, 1, 1, 0, 0),
+      _mm512_castsi256_si512(_mm256_maskz_loadu_epi32(im, idx + c0)));
   size_t m = 0;
+  /* one q against the lanes of lm */
+#define NBS__CS_STEP512(q, lm)                                                                \
+  do {                                                                                        \
+    __m512d dx = _mm512_sub_pd(PX, _mm512_set1_pd(X[q]));                                     \
+    __m512d dy = _mm512_sub_pd(PY, _mm512_set1_pd(Y[q]));                                     \
+    __m512d d = _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy));                  \
+    if (dim == 3) {                                                                           \
+      __m512d dz = _mm512_sub_pd(PZ, _mm512_set1_pd(Z[q]));                                   \
+      d = _mm512_add_pd(d, _mm512_mul_pd(dz, dz));                                            \
+    }                                                                                         \
+    __m512d lim = LIM;                                                                        \
+    if (radii) {                                                                              \
+      __m512d rr = _mm512_add_pd(PR, _mm512_set1_pd(R[q]));                                   \
+      lim = _mm512_mul_pd(rr, rr);                                                            \
+    }                                                                                         \
+    const __mmask8 hit = contacts ? _mm512_mask_cmp_pd_mask((lm), d, lim, _CMP_LE_OQ) : (lm); \
+    const __m512i IQ = _mm512_set1_epi32(idx[q]);                                             \
+    const __m512i pr = _mm512_mask_max_epi32(_mm512_min_epi32(IP2, IQ), 0xAAAA, IP2, IQ);     \
+    _mm512_storeu_si512((void *)(out + m), _mm512_maskz_compress_epi64(hit, pr));             \
+    m += (size_t)__builtin_popcount(hit);                                                     \
+  } while (0)
+  /* the ranges before the block meet every lane; the block's own elements q meet the lanes
+   * before them: the last range ends with the block (see nbs__cs_offer) */
+  const int last = rg->count - 1;
   for (int r = 0; r < rg->count; r++) {
-    for (int32_t q = rg->q0[r]; q < rg->q1[r]; q++) {
-      __m512d dx = _mm512_sub_pd(PX, _mm512_set1_pd(X[q]));
-      __m512d dy = _mm512_sub_pd(PY, _mm512_set1_pd(Y[q]));
-      __m512d d = _mm512_add_pd(_mm512_mul_pd(dx, dx), _mm512_mul_pd(dy, dy));
-      if (dim == 3) {
-        __m512d dz = _mm512_sub_pd(PZ, _mm512_set1_pd(Z[q]));
-        d = _mm512_add_pd(d, _mm512_mul_pd(dz, dz));
-      }
-      __m512d lim = LIM;
-      if (radii) {
-        __m512d rr = _mm512_add_pd(PR, _mm512_set1_pd(R[q]));
-        lim = _mm512_mul_pd(rr, rr);
-      }
-      const __mmask8 lm = q < c0 ? im : (__mmask8)((1u << (q - c0)) - 1);
-      const __mmask8 hit = contacts ? _mm512_mask_cmp_pd_mask(lm, d, lim, _CMP_LE_OQ) : lm;
-      const __m256i IQ = _mm256_set1_epi32(idx[q]);
-      const __m512i lo = _mm512_cvtepu32_epi64(_mm256_min_epi32(IP, IQ));
-      const __m512i hi = _mm512_cvtepu32_epi64(_mm256_max_epi32(IP, IQ));
-      const __m512i pr = _mm512_or_si512(lo, _mm512_slli_epi64(hi, 32)); /* {i, j} in memory */
-      _mm512_storeu_si512((void *)(out + m), _mm512_maskz_compress_epi64(hit, pr));
-      m += (size_t)__builtin_popcount(hit);
+    const int32_t q1 = r == last && rg->q1[r] > c0 ? c0 : rg->q1[r];
+    for (int32_t q = rg->q0[r]; q < q1; q++) NBS__CS_STEP512(q, im);
+  }
+  if (rg->q1[last] > c0) {
+    const int32_t q0 = rg->q0[last] > c0 + 1 ? rg->q0[last] : c0 + 1;
+    for (int32_t q = q0; q < rg->q1[last]; q++) {
+      NBS__CS_STEP512(q, (__mmask8)((1u << (q - c0)) - 1));
     }
   }
+#undef NBS__CS_STEP512
   return m;
 }
 
@@ -352,7 +369,6 @@ int nbs__cellsort_simd(void) {
  * range in slices of at most NBS__CS_SLICE elements (so that the room asked of the sink
  * stays small), or pair by pair when there is no room (a callback's batch smaller than a
  * slice, or max_pairs in reach). */
-#define NBS__CS_SLICE 256
 static nbs_status nbs__cs_offer_slices(const nbs__cs *c, nbs__sink *s, int32_t c0, int lanes,
                                        const nbs__cs_ranges *rg) {
   for (int r = 0; r < rg->count; r++) {
