@@ -543,8 +543,16 @@ nbs__cs_sweep_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
       rg.q0[rg.count] = w;
       rg.q1[rg.count] = c0 + lanes;
       rg.count++;
-      /* a lone element with nothing before it (sparse rows): no candidate */
-      if (rg.count == 1 && w == c0 && lanes == 1) continue;
+      /* nothing in reach (sparse rows): no neighbouring window, nothing before the block
+       * within one edge in x, and the block's own elements more than one edge apart (keys
+       * more than `fine` apart, the windows' own criterion): no candidate, no kernel call
+       * (2D huge domain, N = 1e6, where a quarter of the rows hold two elements or more:
+       * sweep 16 -> 15 ns per element; 3D: 19 -> 17.5) */
+      if (rg.count == 1 && w == c0) {
+        int l = 1;
+        while (l < lanes && (key[c0 + l] & mx) - (key[c0 + l - 1] & mx) > fine) l++;
+        if (l == lanes) continue;
+      }
       st = nbs__cs_offer(c, s, c0, lanes, &rg);
     }
     a = b;
