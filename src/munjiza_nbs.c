@@ -261,11 +261,20 @@ static nbs_status nbs__nbs_2d(nbs__run *run, const nbs__nbs_layout *L) {
       NBS__NBS_TRY(nbs__nbs_check_cell(run, X, c, nb));
     }
 
-    /* Removal of the x-lists: reset only the heads the two rows touched. */
-    for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) {
+    /* Removal of the x-lists: reset only the heads the two rows touched (side by side). */
+    e0 = row;
+    e1 = below;
+    while (e0 != NBS__EMPTY && e1 != NBS__EMPTY) {
+      int32_t ix0 = nbs__nbs_cell(g, x, 2, e0, 0), ix1 = nbs__nbs_cell(g, x, 2, e1, 0);
+      e0 = Y[e0];
+      e1 = Y[e1];
+      A0[ix0] = NBS__EMPTY;
+      A1[ix1] = NBS__EMPTY;
+    }
+    for (int32_t e = e0; e != NBS__EMPTY; e = Y[e]) {
       A0[nbs__nbs_cell(g, x, 2, e, 0)] = NBS__EMPTY;
     }
-    for (int32_t e = below; e != NBS__EMPTY; e = Y[e]) {
+    for (int32_t e = e1; e != NBS__EMPTY; e = Y[e]) {
       A1[nbs__nbs_cell(g, x, 2, e, 0)] = NBS__EMPTY;
     }
   }
@@ -390,11 +399,20 @@ static nbs_status nbs__nbs_3d(nbs__run *run, const nbs__nbs_layout *L) {
       }
     }
 
-    /* Step 11: remove the y-lists of the central layer and of layer iz-1. */
-    for (int32_t e = layer; e != NBS__EMPTY; e = Z[e]) {
+    /* Step 11: remove the y-lists of the central layer and of layer iz-1 (side by side). */
+    e0 = layer;
+    e1 = under;
+    while (e0 != NBS__EMPTY && e1 != NBS__EMPTY) {
+      int32_t iy0 = nbs__nbs_cell(g, x, 3, e0, 1), iy1 = nbs__nbs_cell(g, x, 3, e1, 1);
+      e0 = Z[e0];
+      e1 = Z[e1];
+      B0[iy0] = NBS__EMPTY;
+      B1[iy1] = NBS__EMPTY;
+    }
+    for (int32_t e = e0; e != NBS__EMPTY; e = Z[e]) {
       B0[nbs__nbs_cell(g, x, 3, e, 1)] = NBS__EMPTY;
     }
-    for (int32_t e = under; e != NBS__EMPTY; e = Z[e]) {
+    for (int32_t e = e1; e != NBS__EMPTY; e = Z[e]) {
       B1[nbs__nbs_cell(g, x, 3, e, 1)] = NBS__EMPTY;
     }
   }
