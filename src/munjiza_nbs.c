@@ -58,6 +58,9 @@ typedef struct nbs__nbs_layout {
   int32_t *A0;        /* x-list heads of the central row */
   int32_t *A1;        /* x-list heads of the neighbouring rows */
   int32_t *Z, *Y, *X; /* next arrays (Z in 3D only) */
+  /* The heads each set's lists were started at, in the order they were started: at most
+   * ny (RB0, RB1; 3D only) and nx (RA0, RA1) entries. */
+  int32_t *RB0, *RB1, *RA0, *RA1;
 } nbs__nbs_layout;
 
 /* Number of heads for capacities cap[] = {nx, ny, nz (0 in 2D), N}, padding included. */
@@ -72,9 +75,18 @@ static int64_t nbs__nbs_head_count(int dim, const int64_t cap[4]) {
   return h;
 }
 
-/* Bytes of the whole layout: heads and (dim) next arrays of N int32 each (eqs. 3.65, 3.80). */
+/* Number of entries of the started-heads records: 2 (nx + 1), and 2 (ny + 1) in 3D (each
+ * record has room for one entry more than the heads it can name, written and not counted by
+ * a push that starts no list). */
+static int64_t nbs__nbs_record_count(int dim, const int64_t cap[4]) {
+  return 2 * (cap[0] + 1) + (dim == 3 ? 2 * (cap[1] + 1) : 0);
+}
+
+/* Bytes of the whole layout: heads, records of started heads and (dim) next arrays of N
+ * int32 each (eqs. 3.65, 3.80, plus 2nx (2D) or 2nx + 2ny (3D) for the records). */
 static uint64_t nbs__nbs_layout_bytes(int dim, const int64_t cap[4]) {
-  uint64_t ints = (uint64_t)nbs__nbs_head_count(dim, cap) + (uint64_t)dim * (uint64_t)cap[3];
+  uint64_t ints = (uint64_t)nbs__nbs_head_count(dim, cap) +
+                  (uint64_t)nbs__nbs_record_count(dim, cap) + (uint64_t)dim * (uint64_t)cap[3];
   return ints * sizeof(int32_t);
 }
 
@@ -99,6 +111,18 @@ static void nbs__nbs_layout_at(nbs__nbs_layout *L, void *work, int dim, const in
   w += cap[0] + 2;
   L->A1 = w;
   w += cap[0] + 2;
+  if (dim == 3) {
+    L->RB0 = w;
+    w += cap[1] + 1;
+    L->RB1 = w;
+    w += cap[1] + 1;
+  } else {
+    L->RB0 = L->RB1 = NULL;
+  }
+  L->RA0 = w;
+  w += cap[0] + 1;
+  L->RA1 = w;
+  w += cap[0] + 1;
   if (dim == 3) {
     L->Z = w;
     w += cap[3];
@@ -195,6 +219,46 @@ static inline nbs_status nbs__nbs_check_cell(nbs__run *run, const int32_t *X, in
     if (nbs__s != NBS_OK) return nbs__nbs_abort(run, nbs__s);                                 \
   } while (0)
 
+/* Pushes element e onto the list of head H[i] (its link: next), and records i in R[top++]
+ * when the list was empty, i.e. when e starts it. */
+#define NBS__NBS_PUSH(e, next, H, i, R, top)                                                  \
+  do {                                                                                        \
+    const int32_t nbs__h = (H)[i];                                                            \
+    (next) = nbs__h;                                                                          \
+    (H)[i] = (e);                                                                             \
+    (R)[top] = (i);                                                                           \
+    (top) += nbs__h == NBS__EMPTY;                                                            \
+  } while (0)
+
+/* Pushes element e onto the x-list of its cell in the set A (record R, top). */
+#define NBS__NBS_PUSH_X(e, A, R, top, dim)                                                    \
+  do {                                                                                        \
+    const int32_t nbs__ix = nbs__nbs_cell(g, x, dim, (e), 0);                                 \
+    NBS__NBS_PUSH((e), X[e], A, nbs__ix, R, top);                                             \
+  } while (0)
+
+/* Pushes the elements of the y-lists starting at e0 and e1 onto the x-lists of the sets A0
+ * and A1, walking the two lists side by side so that their cache misses overlap; each
+ * x-list still gets its elements in the book's order. */
+#define NBS__NBS_PUSH_ROWS(first0, first1, dim)                                               \
+  do {                                                                                        \
+    int32_t f0 = (first0), f1 = (first1);                                                     \
+    while (f0 != NBS__EMPTY && f1 != NBS__EMPTY) {                                            \
+      const int32_t m0 = Y[f0], m1 = Y[f1];                                                   \
+      NBS__NBS_PUSH_X(f0, A0, RA0, na0, dim);                                                 \
+      NBS__NBS_PUSH_X(f1, A1, RA1, na1, dim);                                                 \
+      f0 = m0;                                                                                \
+      f1 = m1;                                                                                \
+    }                                                                                         \
+    for (; f0 != NBS__EMPTY; f0 = Y[f0]) NBS__NBS_PUSH_X(f0, A0, RA0, na0, dim);              \
+    for (; f1 != NBS__EMPTY; f1 = Y[f1]) NBS__NBS_PUSH_X(f1, A1, RA1, na1, dim);              \
+  } while (0)
+
+/* Empties the heads H[R[0..top-1]] that a set's lists were started at. */
+static inline void nbs__nbs_clear(int32_t *H, const int32_t *R, int32_t top) {
+  for (int32_t i = 0; i < top; i++) H[R[i]] = NBS__EMPTY;
+}
+
 /* ---- 2D (section 3.8) ---------------------------------------------------------------- */
 
 static nbs_status nbs__nbs_2d(nbs__run *run, const nbs__nbs_layout *L) {
@@ -206,6 +270,8 @@ static nbs_status nbs__nbs_2d(nbs__run *run, const nbs__nbs_layout *L) {
   int32_t *restrict A1 = L->A1;
   int32_t *restrict Y = L->Y;
   int32_t *restrict X = L->X;
+  int32_t *restrict RA0 = L->RA0;
+  int32_t *restrict RA1 = L->RA1;
 
   /* Mapping onto rows: integerise y and push each element on its y-list (the book's
    * eqs. 3.34-3.35 with one coordinate): Y[k] = B[iy]; B[iy] = k. */
@@ -226,29 +292,9 @@ static nbs_status nbs__nbs_2d(nbs__run *run, const nbs__nbs_layout *L) {
     const int32_t below = nbs__unmark(B[iy - 1]);
 
     /* x-lists of set 0: the elements of the central row iy; x-lists of set 1: the elements
-     * of the neighbouring row iy-1. The two walks go side by side (their misses overlap);
-     * each list gets its elements in the book's order. */
-    int32_t e0 = row, e1 = below;
-    while (e0 != NBS__EMPTY && e1 != NBS__EMPTY) {
-      int32_t ix0 = nbs__nbs_cell(g, x, 2, e0, 0), ix1 = nbs__nbs_cell(g, x, 2, e1, 0);
-      int32_t n0 = Y[e0], n1 = Y[e1];
-      X[e0] = A0[ix0];
-      A0[ix0] = e0;
-      X[e1] = A1[ix1];
-      A1[ix1] = e1;
-      e0 = n0;
-      e1 = n1;
-    }
-    for (int32_t e = e0; e != NBS__EMPTY; e = Y[e]) {
-      int32_t ix = nbs__nbs_cell(g, x, 2, e, 0);
-      X[e] = A0[ix];
-      A0[ix] = e;
-    }
-    for (int32_t e = e1; e != NBS__EMPTY; e = Y[e]) {
-      int32_t ix = nbs__nbs_cell(g, x, 2, e, 0);
-      X[e] = A1[ix];
-      A1[ix] = e;
-    }
+     * of the neighbouring row iy-1. */
+    int32_t na0 = 0, na1 = 0;
+    NBS__NBS_PUSH_ROWS(row, below, 2);
 
     /* Loop over the central row: the first element in a "new" cell makes it the central
      * cell; mark it and check it with the contact mask. */
@@ -261,22 +307,9 @@ static nbs_status nbs__nbs_2d(nbs__run *run, const nbs__nbs_layout *L) {
       NBS__NBS_TRY(nbs__nbs_check_cell(run, X, c, nb));
     }
 
-    /* Removal of the x-lists: reset only the heads the two rows touched (side by side). */
-    e0 = row;
-    e1 = below;
-    while (e0 != NBS__EMPTY && e1 != NBS__EMPTY) {
-      int32_t ix0 = nbs__nbs_cell(g, x, 2, e0, 0), ix1 = nbs__nbs_cell(g, x, 2, e1, 0);
-      e0 = Y[e0];
-      e1 = Y[e1];
-      A0[ix0] = NBS__EMPTY;
-      A1[ix1] = NBS__EMPTY;
-    }
-    for (int32_t e = e0; e != NBS__EMPTY; e = Y[e]) {
-      A0[nbs__nbs_cell(g, x, 2, e, 0)] = NBS__EMPTY;
-    }
-    for (int32_t e = e1; e != NBS__EMPTY; e = Y[e]) {
-      A1[nbs__nbs_cell(g, x, 2, e, 0)] = NBS__EMPTY;
-    }
+    /* Removal of the x-lists: reset the heads the two rows started. */
+    nbs__nbs_clear(A0, RA0, na0);
+    nbs__nbs_clear(A1, RA1, na1);
   }
 
   /* Removal of the y-lists, by a loop over the elements (eqs. 3.36-3.37 for rows). */
@@ -286,19 +319,12 @@ static nbs_status nbs__nbs_2d(nbs__run *run, const nbs__nbs_layout *L) {
 
 /* ---- 3D (section 3.10; the numbered steps are those of the pseudocode on p. 127) ----- */
 
-/* Pushes the elements of the y-list starting at `first` onto the x-lists of the set A. */
-#define NBS__NBS_PUSH_ROW(first, A)                                                           \
-  for (int32_t e = (first); e != NBS__EMPTY; e = Y[e]) {                                      \
-    int32_t ix = nbs__nbs_cell(g, x, 3, e, 0);                                                \
-    X[e] = (A)[ix];                                                                           \
-    (A)[ix] = e;                                                                              \
-  }
-
-/* Removes the x-lists of the set A that the elements of the y-list `first` built. */
-#define NBS__NBS_CLEAR_ROW(first, A)                                                          \
-  for (int32_t e = (first); e != NBS__EMPTY; e = Y[e]) {                                      \
-    (A)[nbs__nbs_cell(g, x, 3, e, 0)] = NBS__EMPTY;                                           \
-  }
+/* Pushes element e onto the y-list of its row in the set B (record R, top). */
+#define NBS__NBS_PUSH_Y(e, B, R, top)                                                         \
+  do {                                                                                        \
+    const int32_t nbs__iy = nbs__nbs_cell(g, x, 3, (e), 1);                                   \
+    NBS__NBS_PUSH((e), Y[e], B, nbs__iy, R, top);                                             \
+  } while (0)
 
 static nbs_status nbs__nbs_3d(nbs__run *run, const nbs__nbs_layout *L) {
   const nbs__grid *g = &run->grid;
@@ -312,6 +338,10 @@ static nbs_status nbs__nbs_3d(nbs__run *run, const nbs__nbs_layout *L) {
   int32_t *restrict Z = L->Z;
   int32_t *restrict Y = L->Y;
   int32_t *restrict X = L->X;
+  int32_t *restrict RB0 = L->RB0;
+  int32_t *restrict RB1 = L->RB1;
+  int32_t *restrict RA0 = L->RA0;
+  int32_t *restrict RA1 = L->RA1;
 
   /* Step 1: map every element onto its z-list (layer): Z[k] = C[iz]; C[iz] = k. All
    * z-lists are "new" (unmarked). */
@@ -334,34 +364,26 @@ static nbs_status nbs__nbs_3d(nbs__run *run, const nbs__nbs_layout *L) {
     /* Step 3: the elements of the central layer onto the y-lists of set 0; step 4: the
      * elements of the neighbouring layer iz-1 onto the y-lists of set 1. The two walks go
      * side by side, so that their cache misses overlap; each list still gets its elements
-     * in the book's order. */
+     * in the book's order. RB0 records the rows of the central layer in the order in which
+     * this walk meets their first element. */
+    int32_t nb0 = 0, nb1 = 0;
     int32_t e0 = layer, e1 = under;
     while (e0 != NBS__EMPTY && e1 != NBS__EMPTY) {
-      int32_t iy0 = nbs__nbs_cell(g, x, 3, e0, 1), iy1 = nbs__nbs_cell(g, x, 3, e1, 1);
-      int32_t n0 = Z[e0], n1 = Z[e1];
-      Y[e0] = B0[iy0];
-      B0[iy0] = e0;
-      Y[e1] = B1[iy1];
-      B1[iy1] = e1;
+      const int32_t n0 = Z[e0], n1 = Z[e1];
+      NBS__NBS_PUSH_Y(e0, B0, RB0, nb0);
+      NBS__NBS_PUSH_Y(e1, B1, RB1, nb1);
       e0 = n0;
       e1 = n1;
     }
-    for (int32_t e = e0; e != NBS__EMPTY; e = Z[e]) {
-      int32_t iy = nbs__nbs_cell(g, x, 3, e, 1);
-      Y[e] = B0[iy];
-      B0[iy] = e;
-    }
-    for (int32_t e = e1; e != NBS__EMPTY; e = Z[e]) {
-      int32_t iy = nbs__nbs_cell(g, x, 3, e, 1);
-      Y[e] = B1[iy];
-      B1[iy] = e;
-    }
+    for (; e0 != NBS__EMPTY; e0 = Z[e0]) NBS__NBS_PUSH_Y(e0, B0, RB0, nb0);
+    for (; e1 != NBS__EMPTY; e1 = Z[e1]) NBS__NBS_PUSH_Y(e1, B1, RB1, nb1);
 
     /* Step 5: loop over the central layer; the first element in a "new" row (iy,iz) makes
-     * it the central row. */
-    for (int32_t r = layer; r != NBS__EMPTY; r = Z[r]) {
-      int32_t iy = nbs__nbs_cell(g, x, 3, r, 1);
-      if (nbs__is_marked(B0[iy])) continue;
+     * it the central row. Those first elements, in the order of the layer, are the ones
+     * step 3 met first in their rows: RB0 lists their rows in that order, so the loop runs
+     * over RB0 instead of walking the layer a second time. */
+    for (int32_t i = 0; i < nb0; i++) {
+      const int32_t iy = RB0[i];
       const int32_t row = B0[iy];
       B0[iy] = nbs__mark(row); /* mark the row "old" */
       /* The neighbouring rows of eq. 3.79: (iy-1,iz) may have been central already (read
@@ -369,15 +391,17 @@ static nbs_status nbs__nbs_3d(nbs__run *run, const nbs__nbs_layout *L) {
       const int32_t nrow[4] = {nbs__unmark(B0[iy - 1]), B1[iy - 1], B1[iy], B1[iy + 1]};
 
       /* The five rows of steps 6-10 walked once side by side, so that their cache misses
-       * overlap and the walks of steps 6-10 find them cached. */
+       * overlap and the walks of steps 6-8 find them cached. */
       const int32_t rows[5] = {row, nrow[0], nrow[1], nrow[2], nrow[3]};
       nbs__nbs_touch_rows(Y, x, 3, rows);
 
-      /* Step 6: the elements of the central row onto the x-lists of set 0. */
-      NBS__NBS_PUSH_ROW(row, A0)
-      /* Step 7: the elements of the neighbouring rows onto the x-lists of set 1. */
-      for (int l = 0; l < 4; l++) {
-        NBS__NBS_PUSH_ROW(nrow[l], A1)
+      /* Step 6: the elements of the central row onto the x-lists of set 0; step 7: the
+       * elements of the neighbouring rows onto the x-lists of set 1 (the central row side by
+       * side with the first of them). */
+      int32_t na0 = 0, na1 = 0;
+      NBS__NBS_PUSH_ROWS(row, nrow[0], 3);
+      for (int l = 1; l < 4; l++) {
+        for (int32_t e = nrow[l]; e != NBS__EMPTY; e = Y[e]) NBS__NBS_PUSH_X(e, A1, RA1, na1, 3);
       }
 
       /* Step 8: loop over the central row; the first element in a "new" cell (ix,iy,iz)
@@ -391,30 +415,15 @@ static nbs_status nbs__nbs_3d(nbs__run *run, const nbs__nbs_layout *L) {
         NBS__NBS_TRY(nbs__nbs_check_cell(run, X, c, nb));
       }
 
-      /* Step 9: remove the x-lists of the central row. */
-      NBS__NBS_CLEAR_ROW(row, A0)
-      /* Step 10: remove the x-lists of the neighbouring rows. */
-      for (int l = 0; l < 4; l++) {
-        NBS__NBS_CLEAR_ROW(nrow[l], A1)
-      }
+      /* Steps 9 and 10: remove the x-lists of the central and of the neighbouring rows,
+       * resetting the heads they started. */
+      nbs__nbs_clear(A0, RA0, na0);
+      nbs__nbs_clear(A1, RA1, na1);
     }
 
-    /* Step 11: remove the y-lists of the central layer and of layer iz-1 (side by side). */
-    e0 = layer;
-    e1 = under;
-    while (e0 != NBS__EMPTY && e1 != NBS__EMPTY) {
-      int32_t iy0 = nbs__nbs_cell(g, x, 3, e0, 1), iy1 = nbs__nbs_cell(g, x, 3, e1, 1);
-      e0 = Z[e0];
-      e1 = Z[e1];
-      B0[iy0] = NBS__EMPTY;
-      B1[iy1] = NBS__EMPTY;
-    }
-    for (int32_t e = e0; e != NBS__EMPTY; e = Z[e]) {
-      B0[nbs__nbs_cell(g, x, 3, e, 1)] = NBS__EMPTY;
-    }
-    for (int32_t e = e1; e != NBS__EMPTY; e = Z[e]) {
-      B1[nbs__nbs_cell(g, x, 3, e, 1)] = NBS__EMPTY;
-    }
+    /* Step 11: remove the y-lists of the central layer and of layer iz-1. */
+    nbs__nbs_clear(B0, RB0, nb0);
+    nbs__nbs_clear(B1, RB1, nb1);
   }
 
   /* Finally remove the z-lists, by a loop over the elements. */
@@ -422,8 +431,10 @@ static nbs_status nbs__nbs_3d(nbs__run *run, const nbs__nbs_layout *L) {
   return NBS_OK;
 }
 
-#undef NBS__NBS_PUSH_ROW
-#undef NBS__NBS_CLEAR_ROW
+#undef NBS__NBS_PUSH
+#undef NBS__NBS_PUSH_X
+#undef NBS__NBS_PUSH_Y
+#undef NBS__NBS_PUSH_ROWS
 #undef NBS__NBS_TRY
 
 /* ---- the dispatcher ------------------------------------------------------------------ */
