@@ -26,7 +26,7 @@
  *      and a compress that stores the pairs found without a branch. Per element that is
  *      about 5 kernel steps and 5/8 of a window update in 3D, instead of 9 candidate tests
  *      and 5 window updates, each ending in a mispredicted branch, for one element at a time
- *      (measured at N = 1e6, one thread: the sweep went from 60 to 22 ns per element).
+ *      (measured at N = 1e6, one thread: the sweep went from 60 to about 20 ns per element).
  *      The generic kernel, for other processors, gives the same bytes in the same order.
  * Memory: 8 (key) + 4 (element) + 8 * dim (coordinates) bytes per element, + 8 with radii:
  * 36 B per element in 3D, whatever the extent of the domain. The radix sort's scratch lives
