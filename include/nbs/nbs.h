@@ -129,7 +129,8 @@ typedef struct nbs_context_def {
    * both or neither; realloc only with them. */
   nbs_allocator allocator;
   /* Largest number of bytes that arrays indexed by cell may take: screening's head array
-   * (one int per cell) and NBS's per-axis head arrays. A detection that would pass it
+   * (one int per cell) and NBS's per-axis head arrays with their records of started
+   * lists (one int per head, about). A detection that would pass it
    * returns NBS_ERR_BUDGET before allocating. Default NBS_DEFAULT_CELL_BUDGET. */
   size_t cell_budget;
   /* Largest number of pairs the context's pair buffer may hold; a detection that finds
