@@ -28,6 +28,93 @@
 
 static const char *const nbs__axis_name[3] = {"x", "y", "z"};
 
+/* The coordinates' pass, written so that the compiler vectorises it: the flat array of
+ * count = n * dim doubles is read in groups of NBS__SCAN_GROUP (a multiple of 2 and 3, so
+ * that place j of every group holds axis j % dim), with a running minimum, maximum and
+ * finiteness sum per place. The sum adds v * 0, which is 0 for a finite v and NaN for an
+ * infinite or NaN one, and is looked at once per block of groups: the first block where it
+ * is not 0 is read again one number at a time to name the first bad element. (The plain
+ * loop, with a test and a branch per number, took 2.8 ns per element of the 36 of a whole
+ * detection at N = 1e6; this one about 1.) The first group is read one number at a time,
+ * so that a short array whose first number is bad is never read past it (test_limits
+ * passes the largest count the API accepts with a NaN first, to see it refused without
+ * 48 GB of coordinates). Returns the first bad element, or -1 with lo and hi set to the
+ * bounding box. */
+#define NBS__SCAN_GROUP 24
+#define NBS__SCAN_BLOCK 256 /* groups per look at the sum */
+static int32_t nbs__scan_coords(const double *x, size_t count, int dim, double lo[3], double hi[3]) {
+  double glo[NBS__SCAN_GROUP], ghi[NBS__SCAN_GROUP], sum[NBS__SCAN_GROUP];
+  for (int j = 0; j < NBS__SCAN_GROUP; j++) {
+    glo[j] = DBL_MAX;
+    ghi[j] = -DBL_MAX;
+    sum[j] = 0.0;
+  }
+  for (size_t k = 0; k < count && k < NBS__SCAN_GROUP; k++) {
+    if (!(x[k] >= -DBL_MAX && x[k] <= DBL_MAX)) return (int32_t)(k / (size_t)dim);
+  }
+  const size_t groups = count / NBS__SCAN_GROUP;
+  size_t at = 0; /* first number not yet known to be finite */
+  for (size_t g0 = 0; g0 < groups; g0 += NBS__SCAN_BLOCK) {
+    const size_t g1 = groups - g0 < NBS__SCAN_BLOCK ? groups : g0 + NBS__SCAN_BLOCK;
+    for (size_t g = g0; g < g1; g++) {
+      const double *v = x + g * NBS__SCAN_GROUP;
+      for (int j = 0; j < NBS__SCAN_GROUP; j++) {
+        glo[j] = v[j] < glo[j] ? v[j] : glo[j];
+        ghi[j] = v[j] > ghi[j] ? v[j] : ghi[j];
+        sum[j] += v[j] * 0.0;
+      }
+    }
+    double total = 0.0;
+    for (int j = 0; j < NBS__SCAN_GROUP; j++) total += sum[j];
+    if (total != 0.0) break; /* NaN: a bad number in this block, found below */
+    at = g1 * NBS__SCAN_GROUP;
+  }
+  for (int a = 0; a < dim; a++) {
+    lo[a] = DBL_MAX;
+    hi[a] = -DBL_MAX;
+  }
+  for (int j = 0; j < NBS__SCAN_GROUP; j++) {
+    const int a = j % dim;
+    if (glo[j] < lo[a]) lo[a] = glo[j];
+    if (ghi[j] > hi[a]) hi[a] = ghi[j];
+  }
+  /* the rest, and a block that held a bad number: one number at a time; the comparisons
+   * are written so that a NaN fails them */
+  for (size_t k = at; k < count; k++) {
+    const double v = x[k];
+    if (!(v >= -DBL_MAX && v <= DBL_MAX)) return (int32_t)(k / (size_t)dim);
+    const int a = (int)(k % (size_t)dim);
+    if (v < lo[a]) lo[a] = v;
+    if (v > hi[a]) hi[a] = v;
+  }
+  return -1;
+}
+
+/* The radii's pass, in the same way: the largest radius, and a count of the radii that are
+ * not finite numbers > 0 per block of NBS__SCAN_GROUP * NBS__SCAN_BLOCK, the first block
+ * that has one read again to name it. Returns that element, or -1 with *rmax set. */
+static int32_t nbs__scan_radii(const double *r, int32_t n, double *rmax) {
+  const int32_t block = NBS__SCAN_GROUP * NBS__SCAN_BLOCK;
+  double top = 0.0;
+  for (int32_t k0 = 0; k0 < n; k0 += block) {
+    const int32_t k1 = n - k0 < block ? n : k0 + block;
+    int32_t bad = 0;
+    double m = top;
+    for (int32_t k = k0; k < k1; k++) {
+      bad += !(r[k] > 0 && r[k] <= DBL_MAX);
+      m = r[k] > m ? r[k] : m;
+    }
+    if (bad) {
+      for (int32_t k = k0; k < k1; k++) {
+        if (!(r[k] > 0 && r[k] <= DBL_MAX)) return k;
+      }
+    }
+    top = m;
+  }
+  *rmax = top;
+  return -1;
+}
+
 nbs_status nbs__prepare(nbs__run *run, const nbs_input *in) {
   nbs_context *ctx = run->ctx;
   if (in->dim != 2 && in->dim != 3) {
@@ -70,31 +157,23 @@ nbs_status nbs__prepare(nbs__run *run, const nbs_input *in) {
     return NBS_OK;
   }
 
-  /* The pass: every coordinate finite, every radius finite and > 0; box and rmax. The
-   * comparisons are written so that a NaN fails them. */
-  double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
-  const double *x = in->coords;
-  for (int32_t k = 0; k < n; k++) {
-    for (int a = 0; a < dim; a++) {
-      double v = x[(size_t)k * (size_t)dim + (size_t)a];
-      if (!(v >= -DBL_MAX && v <= DBL_MAX)) {
-        return nbs__fail(ctx, NBS_ERR_COORD, k, "element %d: %s coordinate is %s", (int)k,
-                         nbs__axis_name[a], isnan(v) ? "NaN" : "infinite");
-      }
-      if (v < lo[a]) lo[a] = v;
-      if (v > hi[a]) hi[a] = v;
-    }
+  /* The pass: every coordinate finite, every radius finite and > 0; box and rmax. */
+  double lo[3], hi[3];
+  int32_t bad = nbs__scan_coords(in->coords, (size_t)n * (size_t)dim, dim, lo, hi);
+  if (bad >= 0) {
+    const double *xb = in->coords + (size_t)bad * (size_t)dim;
+    int a = 0;
+    while (a < dim - 1 && isfinite(xb[a])) a++;
+    return nbs__fail(ctx, NBS_ERR_COORD, bad, "element %d: %s coordinate is %s", (int)bad,
+                     nbs__axis_name[a], isnan(xb[a]) ? "NaN" : "infinite");
   }
   double rmax;
   if (in->radii) {
-    rmax = 0.0;
-    for (int32_t k = 0; k < n; k++) {
-      double r = in->radii[k];
-      if (!(r > 0 && r <= DBL_MAX)) {
-        return nbs__fail(ctx, NBS_ERR_RADIUS, k,
-                         "element %d: radius %g is not a finite number > 0", (int)k, r);
-      }
-      if (r > rmax) rmax = r;
+    bad = nbs__scan_radii(in->radii, n, &rmax);
+    if (bad >= 0) {
+      return nbs__fail(ctx, NBS_ERR_RADIUS, bad,
+                       "element %d: radius %g is not a finite number > 0", (int)bad,
+                       in->radii[bad]);
     }
   } else {
     rmax = 0.5 * in->diameter;

@@ -91,6 +91,53 @@ static void test_bad_numbers(void) {
         s.coords[17 * dim + axis] = keep;
       }
     }
+    /* the pass reads long arrays in blocks: a bad number anywhere, alone or after another,
+     * names the first bad element, its axis and its kind */
+    scene big = test_scene(SCENE_UNIFORM, dim, 20011, 0.5);
+    nbs_input bin = scene_input(&big);
+    const int64_t places[] = {0, 1, 7, 8, 255, 256, 2047, 2048, 2049, 6143, 6144, 10000, 20010};
+    const char *const axis_names[3] = {"x coordinate", "y coordinate", "z coordinate"};
+    for (size_t p = 0; p < sizeof places / sizeof *places; p++) {
+      for (int axis = 0; axis < dim; axis++) {
+        const int b = (int)((p + (size_t)axis) % 3);
+        const size_t at = (size_t)places[p] * (size_t)dim + (size_t)axis;
+        const double keep = big.coords[at];
+        big.coords[at] = bads[b];
+        /* a second bad number later on does not change which one is named */
+        const size_t later = (size_t)big.n * (size_t)dim - 1;
+        const double keep_later = big.coords[later];
+        if (later > at) big.coords[later] = NAN;
+        CHECK_STATUS(nbs_detect(ctx, &bin, NULL), NBS_ERR_COORD);
+        CHECK_EQ(nbs_context_error_element(ctx), places[p]);
+        CHECK_MSG(strstr(nbs_context_error(ctx), axis_names[axis]) != NULL &&
+                      strstr(nbs_context_error(ctx), b == 0 ? "NaN" : "infinite") != NULL,
+                  "element %lld axis %d: message: %s", (long long)places[p], axis,
+                  nbs_context_error(ctx));
+        big.coords[later] = keep_later;
+        big.coords[at] = keep;
+      }
+    }
+    CHECK_STATUS(nbs_detect(ctx, &bin, NULL), NBS_OK);
+    /* the same for radii, read in blocks of their own */
+    double *big_r = malloc((size_t)big.n * sizeof *big_r);
+    for (int64_t k = 0; k < big.n; k++) big_r[k] = 0.5;
+    bin.radii = big_r;
+    for (size_t p = 0; p < sizeof places / sizeof *places; p++) {
+      big_r[places[p]] = p % 2 ? NAN : -0.0;
+      big_r[big.n - 1] = places[p] < big.n - 1 ? INFINITY : big_r[big.n - 1];
+      CHECK_STATUS(nbs_detect(ctx, &bin, NULL), NBS_ERR_RADIUS);
+      CHECK_EQ(nbs_context_error_element(ctx), places[p]);
+      big_r[places[p]] = 0.5;
+      big_r[big.n - 1] = 0.5;
+    }
+    big_r[12345] = 0.75; /* the largest radius sets the cell edge */
+    CHECK_STATUS(nbs_detect(ctx, &bin, NULL), NBS_OK);
+    nbs_stats st;
+    ASSERT_OK(nbs_last_stats(ctx, &st));
+    CHECK_TRUE(st.cell_size >= 1.5 && st.cell_size < 1.5 * (1 + 1e-5));
+    free(big_r);
+    scene_free(&big);
+
     /* radii: <= 0 or not finite, at element 5 */
     const double bad_r[] = {0.0, -1.0, NAN, INFINITY, -0.0};
     double *radii = malloc((size_t)s.n * sizeof *radii);
