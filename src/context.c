@@ -301,9 +301,13 @@ nbs_status nbs_context_reserve(nbs_context *ctx, int64_t n, size_t pairs) {
     return nbs__fail(ctx, NBS_ERR_COUNT, -1, "cannot reserve for %lld elements",
                      (long long)n);
   }
-  /* The largest per-element layout of the algorithms: 4 int32 per element (sorting in 3D),
-   * 3 per element plus the per-axis heads (NBS in 3D). */
-  NBS__TRY(nbs__work_reserve(ctx, (size_t)n * 4 * sizeof(int32_t)));
+  /* The largest per-element layout of the algorithms: cellsort's in 3D with radii (44 bytes
+   * per element, for as many threads as a detection may use), above sorting's 4 int32 and
+   * NBS's 3 int32 plus the per-axis heads. */
+  if (n > 0) {
+    NBS__TRY(nbs__work_reserve(ctx, nbs__cellsort_bytes(3, (int32_t)n, true,
+                                                        nbs__threads(ctx, NBS__THREADS_MAX))));
+  }
   return nbs__pairs_grow(ctx, pairs, 0);
 }
 

@@ -215,6 +215,9 @@ nbs_status nbs__nbs(nbs__run *run);
 nbs_status nbs__cellsort(nbs__run *run);
 /* True when cellsort's 64-bit cell key can index the grid (auto's test). */
 bool nbs__cellsort_fits(const nbs__grid *g);
+/* Bytes of cellsort's work block for n elements (with radii or not) and `threads` threads:
+ * 36 per element in 3D, 28 in 2D, 8 more with radii, whatever the extent. */
+size_t nbs__cellsort_bytes(int dim, int32_t n, bool radii, int threads);
 /* Which kernel cellsort uses in this process: 1 (AVX-512) or 0 (generic); the environment
  * variable NBS_SIMD=generic asks for the generic one. */
 int nbs__cellsort_simd(void);

@@ -126,8 +126,9 @@ static void test_no_allocation_after_first(void) {
   }
 }
 
-/* nbs_context_reserve makes even the first detection allocation-free (sorting's layout
- * depends only on N). */
+/* nbs_context_reserve makes even the first detection allocation-free, for every algorithm
+ * whose layout depends only on N (all but screening and NBS, whose cell arrays follow the
+ * extent), with or without radii, in 2D and 3D. */
 static void test_reserve(void) {
   scene s = test_scene(SCENE_UNIFORM, 3, 4000, 0.5);
   test_alloc ta = {0, 0, 0, -1, 0, 0};
@@ -135,15 +136,29 @@ static void test_reserve(void) {
   cdef.allocator = test_allocator(&ta);
   nbs_context *ctx;
   ASSERT_OK(nbs_context_create(&cdef, &ctx));
-  ASSERT_OK(nbs_context_reserve(ctx, 4000, 100000));
+  ASSERT_OK(nbs_context_reserve(ctx, 4000, 400000));
   CHECK_STATUS(nbs_context_reserve(ctx, -1, 0), NBS_ERR_COUNT);
   CHECK_STATUS(nbs_context_reserve(NULL, 1, 0), NBS_ERR_NULL);
   long calls = ta.calls;
   nbs_input in = scene_input(&s);
-  nbs_detect_def def = nbs_default_detect_def();
-  def.algorithm = NBS_SORTING;
-  ASSERT_OK(nbs_detect(ctx, &in, &def));
-  CHECK_EQ(ta.calls, calls);
+  double *radii = malloc(4000 * sizeof *radii);
+  for (int k = 0; k < 4000; k++) radii[k] = 0.25 + 0.125 * (k % 3);
+  const nbs_algorithm algos[] = {NBS_AUTO, NBS_DIRECT, NBS_SORTING, NBS_CELLSORT};
+  for (size_t a = 0; a < sizeof algos / sizeof *algos; a++) {
+    for (int with_radii = 0; with_radii < 2; with_radii++) {
+      for (int dim = 2; dim <= 3; dim++) {
+        nbs_detect_def def = nbs_default_detect_def();
+        def.algorithm = algos[a];
+        in.dim = dim;
+        in.n = 4000; /* in 2D, the first 8000 numbers of the same coordinates */
+        in.radii = with_radii ? radii : NULL;
+        ASSERT_OK(nbs_detect(ctx, &in, &def));
+        CHECK_MSG(ta.calls == calls, "%s %dD radii %d: %ld allocations after reserve",
+                  nbs_algorithm_name(algos[a]), dim, with_radii, ta.calls - calls);
+      }
+    }
+  }
+  free(radii);
   nbs_context_destroy(ctx);
   CHECK_EQ(ta.live, 0);
   scene_free(&s);
