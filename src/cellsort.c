@@ -66,8 +66,10 @@
 #endif
 
 #define NBS__RADIX_BITS 9
-/* How far ahead the gather prefetches. */
-#define NBS__CS_AHEAD 16
+/* How far ahead the gather prefetches: far enough for the memory's latency at the rate the
+ * loop runs (3D, N = 1e6, both ends of each element prefetched: 16 ahead 6.6 ns per
+ * element, 64 ahead 3.6, 128 ahead 2.9; 2D 5.0, 3.0, 2.2). */
+#define NBS__CS_AHEAD 128
 /* Entries after the end of the key array, read by NBS__CS_ADVANCE: the keys it compares at
  * once. */
 #define NBS__CS_PAD 16
@@ -758,7 +760,10 @@ nbs_status nbs__cellsort(nbs__run *run) {
     /* ask for an element a few iterations ahead: the reads are random */
     const int32_t pa = p + NBS__CS_AHEAD < n ? p + NBS__CS_AHEAD : p;
     const int32_t ahead = packed ? (int32_t)(uint32_t)c.key[pa] : c.idx[pa];
+    /* both ends: in 3D a quarter of the elements straddle two cache lines */
     __builtin_prefetch(x + (size_t)ahead * (size_t)dim);
+    __builtin_prefetch(x + (size_t)ahead * (size_t)dim + (dim - 1));
+    if (c.rs) __builtin_prefetch(run->r + ahead);
     const int32_t e = packed ? (int32_t)(uint32_t)c.key[p] : c.idx[p];
     const double *xk = x + (size_t)e * (size_t)dim;
     c.xs[p] = xk[0];
