@@ -12,10 +12,10 @@
  *   2. LSD radix sort of (key, element) by the key's significant bits only, in as few
  *      passes of at most 9 bits as they need; the scatter of each pass writes into at most
  *      2^9 sequential streams, which caches handle well (measured: a pass of 11 bits costs
- *      more than twice one of 8). A key of at most 31 bits (up to about 1e8 elements at
- *      the fraction 0.5, in 2D and 3D) is packed with its element in one 64-bit word, so
- *      that a pass moves 8 bytes, not 12, and the sweep reads one array for both (3D,
- *      N = 1e6: sort 5.4 -> 3.4 ns per element, detection 34 -> 31);
+ *      more than twice one of 8). Where the key and the element's number fit 63 bits
+ *      together (every scene of the benchmarks but the 3D sparse and clustered ones), they
+ *      share one 64-bit word, so that a pass moves 8 bytes, not 12, and the sweep reads one
+ *      array for both (3D, N = 1e6: sort 5.4 -> 3.4 ns per element, detection 34 -> 31);
  *   3. gather the coordinates (and radii) in cell order, prefetching a few elements ahead:
  *      the last random access;
  *   4. sweep the rows in key order, in blocks of 8 consecutive elements of a row. A block
@@ -98,7 +98,9 @@ struct nbs__cs {
   double d2;
   int64_t nx, ny, nz;
   int bx, by;     /* bits of the key for the x sub-cell and for iy (iz takes the rest) */
-  int ks;         /* where the key starts in a word of key[]: 32 when packed, else 0 */
+  int ks;         /* where the key starts in a word of key[]: the element's bits when
+                   * packed, else 0 */
+  uint32_t imask; /* the element's bits in the low half of a word (all ones unpacked) */
   uint64_t fine;  /* sub-cells per cell edge on x */
 };
 
@@ -279,12 +281,13 @@ nbs__cs_block_body(const nbs__cs *c, int dim, bool radii, bool contacts, int32_t
   const double *X = c->xs, *Y = c->ys, *Z = c->zs, *R = c->rs;
   const int32_t *ids = c->ids;
   const size_t istep = (size_t)c->istep;
+  const int32_t imask = (int32_t)c->imask;
   const double d2 = c->d2;
   size_t m = 0;
   for (int r = 0; r < rg->count; r++) {
     for (int32_t q = rg->q0[r]; q < rg->q1[r]; q++) {
       const double qx = X[q], qy = Y[q], qz = dim == 3 ? Z[q] : 0.0, rq = radii ? R[q] : 0.0;
-      const int32_t iq = ids[(size_t)q * istep];
+      const int32_t iq = ids[(size_t)q * istep] & imask;
       const int end = q < c0 ? lanes : (int)(q - c0);
       for (int l = 0; l < end; l++) {
         const int32_t p = c0 + l;
@@ -299,7 +302,7 @@ nbs__cs_block_body(const nbs__cs *c, int dim, bool radii, bool contacts, int32_t
           double rr = R[p] + rq;
           lim = rr * rr;
         }
-        const int32_t ip = ids[(size_t)p * istep];
+        const int32_t ip = ids[(size_t)p * istep] & imask;
         nbs_pair pr;
         pr.i = ip < iq ? ip : iq;
         pr.j = ip < iq ? iq : ip;
@@ -342,6 +345,7 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int3
   const double *X = c->xs, *Y = c->ys, *Z = c->zs, *R = c->rs;
   const int32_t *ids = c->ids;
   const size_t istep = (size_t)c->istep;
+  const int32_t imask = (int32_t)c->imask;
   const __mmask8 im = (__mmask8)((1u << lanes) - 1);
   const __m512d PX = _mm512_maskz_loadu_pd(im, X + c0), PY = _mm512_maskz_loadu_pd(im, Y + c0);
   const __m512d PZ = dim == 3 ? _mm512_maskz_loadu_pd(im, Z + c0) : _mm512_setzero_pd();
@@ -349,13 +353,13 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int3
   const __m512d LIM = _mm512_set1_pd(c->d2);
   /* each lane's element twice, {ip, ip}: a pair {min, max} is then one min of all 16 int32
    * and one max of the odd ones, already in nbs_pair's layout */
-  const __m512i IP2 =
+  const __m512i IP2 = _mm512_and_si512(_mm512_set1_epi32(imask),
       istep == 1 ? _mm512_permutexvar_epi32(
                        _mm512_set_epi32(7, 7, 6, 6, 5, 5, 4, 4, 3, 3, 2, 2, 1, 1, 0, 0),
                        _mm512_castsi256_si512(_mm256_maskz_loadu_epi32(im, ids + c0)))
                  : _mm512_permutexvar_epi32( /* the low halves of 8 packed words */
                        _mm512_set_epi32(14, 14, 12, 12, 10, 10, 8, 8, 6, 6, 4, 4, 2, 2, 0, 0),
-                       _mm512_maskz_loadu_epi64(im, ids + 2 * (size_t)c0));
+                       _mm512_maskz_loadu_epi64(im, ids + 2 * (size_t)c0)));
   size_t m = 0;
   /* one q against the lanes of lm */
 #define NBS__CS_STEP512(q, lm)                                                                \
@@ -373,7 +377,7 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int3
       lim = _mm512_mul_pd(rr, rr);                                                            \
     }                                                                                         \
     const __mmask8 hit = contacts ? _mm512_mask_cmp_pd_mask((lm), d, lim, _CMP_LE_OQ) : (lm); \
-    const __m512i IQ = _mm512_set1_epi32(ids[(size_t)(q)*istep]);                            \
+    const __m512i IQ = _mm512_set1_epi32(ids[(size_t)(q)*istep] & imask);                   \
     const __m512i pr = _mm512_mask_max_epi32(_mm512_min_epi32(IP2, IQ), 0xAAAA, IP2, IQ);     \
     _mm512_storeu_si512((void *)(out + m), _mm512_maskz_compress_epi64(hit, pr));             \
     m += (size_t)__builtin_popcount(hit);                                                     \
@@ -685,18 +689,20 @@ nbs_status nbs__cellsort(nbs__run *run) {
                      "cellsort: %lld x %lld x %lld cells need a %d-bit key; use 'auto'",
                      (long long)nx, (long long)ny, (long long)nz, bx + by + bz);
   }
-  if (bx + by + bz + fine_bits > 64) fine_bits = 64 - (bx + by + bz);
+  /* The key shares its word with the element when both fit, key << eb | element with eb
+   * the bits of n - 1: the sort then moves 8 bytes per element and pass instead of 12, and
+   * the sweep reads one array for both. At most 63 bits in all, so that the padding after
+   * the end (all ones) stays above every bound "up to a key". The x sub-cells give up bits
+   * for it (a sparse domain, where they matter little, is where the cells need many). */
+  const int cell_bits = bx + by + bz, eb = nbs__bits((uint64_t)n);
+  const bool packed = cell_bits + eb <= 63;
+  const int spare = packed ? 63 - eb - cell_bits : 64 - cell_bits;
+  if (fine_bits > spare) fine_bits = spare;
   bx += fine_bits;
+  const int bits = bx + by + bz;
   run->cells[0] = nx;
   run->cells[1] = ny;
   run->cells[2] = dim == 3 ? nz : 1;
-
-  /* A key of at most 31 bits shares its word with the element (key << 32 | element): the
-   * sort then moves 8 bytes per element and pass instead of 12, and the sweep reads one
-   * array for both. 31, not 32, so that the padding after the end (all ones) stays above
-   * every bound "up to a key". */
-  const int bits = bx + by + bz;
-  const bool packed = bits <= 31;
 
   /* layout: key[n + pad] | idx[n, padded to 8 bytes; used by unpacked keys only] |
    * xs[n * dim] | rs[n] | hist[threads * 2^9]: the same for packed and unpacked keys, so
@@ -739,7 +745,8 @@ nbs_status nbs__cellsort(nbs__run *run) {
   c.bx = bx;
   c.by = by;
   c.fine = (uint64_t)1 << fine_bits;
-  c.ks = packed ? 32 : 0;
+  c.ks = packed ? eb : 0;
+  c.imask = packed ? (uint32_t)(((uint64_t)1 << eb) - 1) : UINT32_MAX;
   run->work_bytes = bytes;
 
   /* 1. keys */
@@ -757,6 +764,7 @@ nbs_status nbs__cellsort(nbs__run *run) {
    * skipped). */
   uint64_t *tk = (uint64_t *)(void *)c.xs;
   int32_t *ti = packed ? NULL : (int32_t *)(void *)(c.xs + nn);
+  const uint64_t emask = c.imask;
   const bool odd = dg.passes % 2 == 1;
   uint64_t *k0 = odd ? tk : c.key, *k1 = odd ? c.key : tk;
   int32_t *i0 = odd ? ti : c.idx, *i1 = odd ? c.idx : ti;
@@ -769,7 +777,7 @@ nbs_status nbs__cellsort(nbs__run *run) {
     uint64_t iz = dim == 3 ? (uint64_t)nbs__cell(g, xk, 2) : 0;
     const uint64_t kk = iz << sz | iy << sy | ix;
     if (packed) {
-      k0[k] = kk << 32 | (uint32_t)k;
+      k0[k] = kk << eb | (uint64_t)k;
     } else {
       k0[k] = kk;
       i0[k] = k;
@@ -786,12 +794,12 @@ nbs_status nbs__cellsort(nbs__run *run) {
   for (int32_t p = 0; p < n; p++) {
     /* ask for an element a few iterations ahead: the reads are random */
     const int32_t pa = p + NBS__CS_AHEAD < n ? p + NBS__CS_AHEAD : p;
-    const int32_t ahead = packed ? (int32_t)(uint32_t)c.key[pa] : c.idx[pa];
+    const int32_t ahead = packed ? (int32_t)(c.key[pa] & emask) : c.idx[pa];
     /* both ends: in 3D a quarter of the elements straddle two cache lines */
     __builtin_prefetch(x + (size_t)ahead * (size_t)dim);
     __builtin_prefetch(x + (size_t)ahead * (size_t)dim + (dim - 1));
     if (c.rs) __builtin_prefetch(run->r + ahead);
-    const int32_t e = packed ? (int32_t)(uint32_t)c.key[p] : c.idx[p];
+    const int32_t e = packed ? (int32_t)(c.key[p] & emask) : c.idx[p];
     const double *xk = x + (size_t)e * (size_t)dim;
     c.xs[p] = xk[0];
     c.ys[p] = xk[1];
