@@ -603,8 +603,11 @@ nbs__cs_sweep_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
         rg.q1[rg.count] = q1[r];
         rg.count += q1[r] > q0[r];
       }
-      /* own row: the elements before the block from fa - fine on, and the block itself */
-      NBS__CS_ADVANCE(key, w, below, (k0 - (fa < fine ? fa : fine)) << ks);
+      /* own row: the elements before the block from fa - fine on (none before a row's
+       * first block: no search there, which spares sparse scenes, whose rows hold one
+       * element or two, a load and compare per row: huge domain, N = 1e6, sweep 13.5 ->
+       * 12.6 ns per element in 2D, 16.7 -> 15.7 in 3D), and the block itself */
+      if (c0 > a) NBS__CS_ADVANCE(key, w, below, (k0 - (fa < fine ? fa : fine)) << ks);
       rg.q0[rg.count] = w;
       rg.q1[rg.count] = c0 + lanes;
       rg.count++;
