@@ -16,8 +16,8 @@
  *      together (every scene of the benchmarks but the 3D sparse and clustered ones), they
  *      share one 64-bit word, so that a pass moves 8 bytes, not 12, and the sweep reads one
  *      array for both (3D, N = 1e6: sort 5.4 -> 3.4 ns per element, detection 34 -> 31);
- *   3. gather the coordinates (and radii) in cell order, prefetching a few elements ahead:
- *      the last random access;
+ *   3. gather the coordinates (and radii) in cell order, prefetching both ends of the
+ *      element 128 places ahead: the last random access;
  *   4. sweep the rows in key order, in blocks of 8 consecutive elements of a row. A block
  *      meets a few ranges of the cell order: itself and the elements before it in its own
  *      row within one edge in x, and a window of each neighbouring row of the half mask
@@ -31,6 +31,9 @@
  *      and 5 window updates, each ending in a mispredicted branch, for one element at a time
  *      (measured at N = 1e6, one thread: the sweep went from 60 to about 20 ns per element).
  *      The generic kernel, for other processors, gives the same bytes in the same order.
+ * Where the time goes (3D, N = 1e6, fraction 0.5, random order, one thread, AVX-512; about
+ * 28 ns per element in all): input validation 0.8, keys 1.2, sort 3.5, gather 3, sweep 19
+ * (the kernel about 13.5 of it, finding windows and rows 5.5).
  * Memory: 8 (key) + 4 (element) + 8 * dim (coordinates) bytes per element, + 8 with radii:
  * 36 B per element in 3D, whatever the extent of the domain (packed keys leave the 4 bytes
  * of the element unused; they are held all the same, so that a scene that spreads out never
