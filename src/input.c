@@ -42,7 +42,8 @@ static const char *const nbs__axis_name[3] = {"x", "y", "z"};
  * bounding box. */
 #define NBS__SCAN_GROUP 24
 #define NBS__SCAN_BLOCK 256 /* groups per look at the sum */
-static int32_t nbs__scan_coords(const double *x, size_t count, int dim, double lo[3], double hi[3]) {
+static int32_t nbs__scan_coords(const double *x, size_t count, int dim, double lo[3],
+                                double hi[3]) {
   double glo[NBS__SCAN_GROUP], ghi[NBS__SCAN_GROUP], sum[NBS__SCAN_GROUP];
   for (int j = 0; j < NBS__SCAN_GROUP; j++) {
     glo[j] = DBL_MAX;

@@ -93,7 +93,7 @@ struct nbs_context {
   /* Threads (cellsort): the number asked for (0: OpenMP's default), and each extra
    * thread's pair list, kept between detections. */
   int threads;
-  /* cellsort's kernel: 1 for AVX-512, 0 for the generic one (nbs__cellsort_simd) */
+  /* cellsort's kernel: NBS__SIMD_GENERIC, _AVX512 or _AVX2 (nbs__cellsort_simd) */
   int simd;
   nbs_pair *tpairs[NBS__THREADS_MAX];
   size_t tcap[NBS__THREADS_MAX];
@@ -218,8 +218,9 @@ bool nbs__cellsort_fits(const nbs__grid *g);
 /* Bytes of cellsort's work block for n elements (with radii or not) and `threads` threads:
  * 36 per element in 3D, 28 in 2D, 8 more with radii, whatever the extent. */
 size_t nbs__cellsort_bytes(int dim, int32_t n, bool radii, int threads);
-/* Which kernel cellsort uses in this process: 1 (AVX-512) or 0 (generic); the environment
- * variable NBS_SIMD=generic asks for the generic one. */
+/* Which kernel cellsort uses in this process (NBS__SIMD_...); the environment variable
+ * NBS_SIMD=generic or NBS_SIMD=avx2 asks for a lesser one. */
+enum { NBS__SIMD_GENERIC = 0, NBS__SIMD_AVX512 = 1, NBS__SIMD_AVX2 = 2 };
 int nbs__cellsort_simd(void);
 
 /* Work-block layouts, for work_kind. */

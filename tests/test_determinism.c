@@ -4,7 +4,7 @@
  *     and the callback sink, each in the algorithm's own order (not sorted);
  *   - across thread counts: cellsort (and auto) with 1, 2, 3, 4, 7 and 8 threads, in order;
  *   - across kernels: cellsort's AVX-512 kernel (where the processor has it) and its generic
- *     one (NBS_SIMD=generic), in order;
+ *     one (NBS_SIMD=generic), in order, and so does the AVX2 one (NBS_SIMD=avx2);
  *   - across algorithms: after nbs_sort_pairs every algorithm gives the same bytes;
  *   - across builds and machines: golden hashes (FNV-1a 64 of the sorted pair list, each
  *     index as 4 little-endian bytes) of fixed scenes, committed below.
@@ -337,32 +337,39 @@ static void test_thread_counts(void) {
 }
 
 /* Kernels: cellsort's generic kernel (asked for with NBS_SIMD=generic, read when a context
- * is created) gives the same bytes in the same order as the one the processor gets, on every
- * case and both modes. On a processor without AVX-512 both contexts use the generic kernel
- * and the comparison still holds. */
+ * is created) gives the same bytes in the same order as the one the processor gets by
+ * default and as the AVX2 one (NBS_SIMD=avx2), on every case and both modes. Where the
+ * processor lacks AVX-512 or AVX2, the contexts fall back to a lesser kernel and the
+ * comparison still holds. */
 static void test_kernels(void) {
+  const char *const kernels[] = {NULL, "avx2"};
   for (size_t c = 0; c < NCASES; c++) {
     scene s = make_case(c);
-    for (int mode = 0; mode < 2; mode++) {
-      nbs_context *best, *generic;
-      ASSERT_OK(nbs_context_create(NULL, &best));
-      ASSERT_TRUE(setenv("NBS_SIMD", "generic", 1) == 0);
-      nbs_status st = nbs_context_create(NULL, &generic);
-      unsetenv("NBS_SIMD");
-      ASSERT_OK(st);
-      pair_list a, b;
-      /* auto where cellsort refuses the extent */
-      st = detect_raw(best, &s, NBS_CELLSORT, (nbs_mode)mode, &a);
-      const nbs_algorithm algo = st == NBS_ERR_EXTENT ? NBS_AUTO : NBS_CELLSORT;
-      if (st == NBS_ERR_EXTENT) ASSERT_OK(detect_raw(best, &s, algo, (nbs_mode)mode, &a));
-      ASSERT_OK(st == NBS_ERR_EXTENT ? NBS_OK : st);
-      ASSERT_OK(detect_raw(generic, &s, algo, (nbs_mode)mode, &b));
-      CHECK_MSG(same_bytes(&a, &b), "%s %s mode %d: the generic kernel differs", cases[c].name,
-                nbs_algorithm_name(algo), mode);
-      pair_list_free(&a);
-      pair_list_free(&b);
-      nbs_context_destroy(best);
-      nbs_context_destroy(generic);
+    for (size_t kn = 0; kn < sizeof kernels / sizeof *kernels; kn++) {
+      for (int mode = 0; mode < 2; mode++) {
+        nbs_context *other, *generic;
+        if (kernels[kn]) ASSERT_TRUE(setenv("NBS_SIMD", kernels[kn], 1) == 0);
+        nbs_status st = nbs_context_create(NULL, &other);
+        ASSERT_TRUE(setenv("NBS_SIMD", "generic", 1) == 0);
+        nbs_status st2 = nbs_context_create(NULL, &generic);
+        unsetenv("NBS_SIMD");
+        ASSERT_OK(st);
+        ASSERT_OK(st2);
+        pair_list a, b;
+        /* auto where cellsort refuses the extent */
+        st = detect_raw(other, &s, NBS_CELLSORT, (nbs_mode)mode, &a);
+        const nbs_algorithm algo = st == NBS_ERR_EXTENT ? NBS_AUTO : NBS_CELLSORT;
+        if (st == NBS_ERR_EXTENT) ASSERT_OK(detect_raw(other, &s, algo, (nbs_mode)mode, &a));
+        ASSERT_OK(st == NBS_ERR_EXTENT ? NBS_OK : st);
+        ASSERT_OK(detect_raw(generic, &s, algo, (nbs_mode)mode, &b));
+        CHECK_MSG(same_bytes(&a, &b), "%s %s mode %d: the %s kernel differs from the generic one",
+                  cases[c].name, nbs_algorithm_name(algo), mode,
+                  kernels[kn] ? kernels[kn] : "default");
+        pair_list_free(&a);
+        pair_list_free(&b);
+        nbs_context_destroy(other);
+        nbs_context_destroy(generic);
+      }
     }
     scene_free(&s);
   }
