@@ -144,8 +144,8 @@ static nbs__digits nbs__radix_digits(int bits) {
 /* LSD radix sort of (key, idx) on the digits dg of key from bit `low` on. The keys start in
  * (sk, si) and the sort moves them between it and (dk, di), both of n entries; the result
  * is left in (out_k, out_i), one of the two (copied there if the passes end in the other).
- * si and di are NULL for packed words (the element in the low 32 bits of the key word,
- * below `low` = 32): then each pass moves 8 bytes instead of 12. hist holds `threads`
+ * si and di are NULL for packed words (the element in the word's `low` bits, below the
+ * key): then each pass moves 8 bytes instead of 12. hist holds `threads`
  * histograms. With several threads each takes a contiguous part of the input and scatters
  * it after the parts of the threads before it, bucket by bucket: the sort stays stable, so
  * its result is the same for any number of threads. A digit shared by every key moves
@@ -158,8 +158,6 @@ static void nbs__radix(uint64_t *sk, int32_t *si, uint64_t *dk, int32_t *di, uin
   const size_t buckets = dg.buckets;
   for (int p = 0; p < dg.passes; p++) {
     const int shift = low + p * dg.width;
-    uint32_t *hp = hist; /* thread t's: hp + t * tstride */
-    const size_t tstride = buckets;
 #if defined(_OPENMP)
 #pragma omp parallel num_threads(threads) if (threads > 1)
 #endif
@@ -169,20 +167,20 @@ static void nbs__radix(uint64_t *sk, int32_t *si, uint64_t *dk, int32_t *di, uin
       t = omp_get_thread_num();
 #endif
       int32_t from = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
-      uint32_t *h = hp + (size_t)t * tstride;
+      uint32_t *h = hist + (size_t)t * buckets;
       memset(h, 0, buckets * sizeof *h);
       for (int32_t k = from; k < to; k++) h[(sk[k] >> shift) & mask]++;
     }
     /* a digit shared by every key moves nothing: skip the pass */
     const uint64_t d0 = (sk[0] >> shift) & mask;
     uint64_t same = 0;
-    for (int t = 0; t < threads; t++) same += hp[(size_t)t * tstride + d0];
+    for (int t = 0; t < threads; t++) same += hist[(size_t)t * buckets + d0];
     if (same == (uint64_t)n) continue;
     uint32_t sum = 0;
     for (size_t b = 0; b < buckets; b++) {
       for (int t = 0; t < threads; t++) {
-        uint32_t c = hp[(size_t)t * tstride + b];
-        hp[(size_t)t * tstride + b] = sum;
+        uint32_t c = hist[(size_t)t * buckets + b];
+        hist[(size_t)t * buckets + b] = sum;
         sum += c;
       }
     }
@@ -195,7 +193,7 @@ static void nbs__radix(uint64_t *sk, int32_t *si, uint64_t *dk, int32_t *di, uin
       t = omp_get_thread_num();
 #endif
       int32_t from = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
-      uint32_t *h = hp + (size_t)t * tstride;
+      uint32_t *h = hist + (size_t)t * buckets;
       if (si) {
         for (int32_t k = from; k < to; k++) {
           uint32_t at = h[(sk[k] >> shift) & mask]++;
@@ -263,11 +261,11 @@ static nbs_status nbs__sink_one(nbs__sink *s, nbs_pair one) {
 /* ---- the block kernels --------------------------------------------------------------
  * The sweep tests a block of up to NBS__CS_LANES consecutive elements of a row (the "i"
  * elements, one per lane) against each element q of a few ranges (the "j" elements): one q
- * against all lanes at once. The ranges come in key order, all before the block's end: a
- * q before the block meets every lane, and a q inside the block meets the lanes before it
- * (each pair of the block once). A kernel writes the pairs that pass (all of them in
- * candidate mode) in the order (q, lane), whatever the instruction set, so every kernel
- * gives the same bytes. The test is the contract's expression, term for term as in
+ * against all lanes at once. The ranges come in key order, the last one ending with the
+ * block: a q before the block meets every lane, and when the last range holds the block,
+ * the block's own 28 pairs follow by rotation (lane l against lane l + k mod 8). A kernel
+ * writes the pairs that pass (all of them in candidate mode) in the order (q, lane), then
+ * (k, l), whatever the instruction set, so every kernel gives the same bytes. The test is the contract's expression, term for term as in
  * nbs__touch, lane by lane, without fused multiply-adds, so that every algorithm decides
  * every tie the same way. A kernel may write up to NBS__CS_LANES pairs past the ones it
  * keeps; the caller makes room for them. */
@@ -422,7 +420,7 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int3
     /* lane l is kept when lane (l + k) mod 8 is in the block too */
     unsigned vm = im & ((unsigned)im >> k | (unsigned)im << (NBS__CS_LANES - k));
     if (k == NBS__CS_LANES / 2) vm &= 0x0F;
-    if (!(vm & 0xFF)) break; /* fewer lanes than k + 1: none for larger k either */
+    if (!vm) break; /* fewer lanes than k + 1: none for larger k either */
     const __m512i rot = _mm512_and_si512(_mm512_add_epi64(iota, _mm512_set1_epi64(k)),
                                          _mm512_set1_epi64(NBS__CS_LANES - 1));
     __m512d dx = _mm512_sub_pd(PX, _mm512_permutexvar_pd(rot, PX));
@@ -510,7 +508,8 @@ nbs__cs_block256_body(const nbs__cs *c, int dim, bool radii, bool contacts, int3
   const __m256i IPa = nbs__cs_twice4(BI), IPb = nbs__cs_twice4(BI + 4);
   const __m256d LIM = _mm256_set1_pd(c->d2);
   size_t m = 0;
-  /* lanes (P?a, P?b) against partners (Q?a, Q?b), keeping the lanes of the bits ka, kb */
+  /* the lanes of half h (a: 0-3, b: 4-7) against partners QX.. IQ, keeping the lanes of the
+   * bits kh */
 #define NBS__CS_HALF256(h, QX, QY, QZ, QR, IQ, kh)                                            \
   do {                                                                                        \
     const __m256d dx = _mm256_sub_pd(X##h, QX), dy = _mm256_sub_pd(Y##h, QY);                 \
@@ -552,7 +551,7 @@ nbs__cs_block256_body(const nbs__cs *c, int dim, bool radii, bool contacts, int3
   for (int k = 1; k <= own; k++) {
     unsigned vm = im & (im >> k | im << (NBS__CS_LANES - k));
     if (k == NBS__CS_LANES / 2) vm &= 0x0F;
-    if (!(vm & 0xFF)) break;
+    if (!vm) break;
     const __m256d qxa = _mm256_loadu_pd(BX + k), qxb = _mm256_loadu_pd(BX + k + 4);
     const __m256d qya = _mm256_loadu_pd(BY + k), qyb = _mm256_loadu_pd(BY + k + 4);
     const __m256d qza = dim == 3 ? _mm256_loadu_pd(BZ + k) : qxa;
@@ -836,8 +835,9 @@ nbs__cs_sweep_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
   return st;
 }
 
-/* The sweep, compiled twice: with the plain counters, and for AVX-512 with the vector ones
- * (the function pointers are constants, so the compiler inlines them). */
+/* The sweep, compiled once per kernel: with the plain counters, and for AVX-512 and AVX2
+ * with their vector ones (the function pointers are constants, so the compiler inlines
+ * them). */
 static nbs_status nbs__cs_sweep_generic(const nbs__cs *c, nbs__sink *out, int32_t from,
                                         int32_t to) {
   return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below, nbs__cs_upto);
@@ -877,11 +877,22 @@ bool nbs__cellsort_fits(const nbs__grid *g) {
   return bits <= 64;
 }
 
-size_t nbs__cellsort_bytes(int dim, int32_t n, bool radii, int threads) {
+/* The work block's layout: key[n + pad] | idx[n, padded to 8 bytes; used by unpacked keys
+ * only] | xs[n * dim] | rs[n, with radii] | hist[threads * 2^9], the same for packed and
+ * unpacked keys, so that a scene that spreads out never makes a detection allocate. at[]
+ * receives where idx, xs, rs and hist start; the total is returned. */
+static size_t nbs__cs_layout(int dim, int32_t n, bool radii, int threads, size_t at[4]) {
   const size_t nn = (size_t)n;
-  return (nn + NBS__CS_PAD) * sizeof(uint64_t) + ((nn * sizeof(int32_t) + 7) & ~(size_t)7) +
-         nn * (size_t)dim * sizeof(double) + (radii ? nn * sizeof(double) : 0) +
-         (size_t)threads * ((size_t)1 << NBS__RADIX_BITS) * sizeof(uint32_t);
+  at[0] = (nn + NBS__CS_PAD) * sizeof(uint64_t);
+  at[1] = at[0] + ((nn * sizeof(int32_t) + 7) & ~(size_t)7);
+  at[2] = at[1] + nn * (size_t)dim * sizeof(double);
+  at[3] = at[2] + (radii ? nn * sizeof(double) : 0);
+  return at[3] + (size_t)threads * ((size_t)1 << NBS__RADIX_BITS) * sizeof(uint32_t);
+}
+
+size_t nbs__cellsort_bytes(int dim, int32_t n, bool radii, int threads) {
+  size_t at[4];
+  return nbs__cs_layout(dim, n, radii, threads, at);
 }
 
 /* Below this many elements per thread, one thread is faster. */
@@ -923,18 +934,12 @@ nbs_status nbs__cellsort(nbs__run *run) {
   run->cells[1] = ny;
   run->cells[2] = dim == 3 ? nz : 1;
 
-  /* layout: key[n + pad] | idx[n, padded to 8 bytes; used by unpacked keys only] |
-   * xs[n * dim] | rs[n] | hist[threads * 2^9]: the same for packed and unpacked keys, so
-   * that a scene that spreads out never makes a detection allocate */
-  size_t nn = (size_t)n;
-  size_t key_b = (nn + NBS__CS_PAD) * sizeof(uint64_t);
-  size_t idx_b = (nn * sizeof(int32_t) + 7) & ~(size_t)7;
-  size_t xs_b = nn * (size_t)dim * sizeof(double);
-  size_t rs_b = run->r ? nn * sizeof(double) : 0;
+  const size_t nn = (size_t)n;
   int threads = nbs__threads(ctx, n / NBS__CS_MIN_PER_THREAD);
   /* callbacks and max_pairs need the pairs in one stream */
   if (run->callback || ctx->max_pairs) threads = 1;
-  size_t bytes = nbs__cellsort_bytes(dim, n, run->r != NULL, threads);
+  size_t at[4];
+  const size_t bytes = nbs__cs_layout(dim, n, run->r != NULL, threads, at);
   NBS__TRY(nbs__work_reserve(ctx, bytes));
   ctx->work_kind = NBS__WORK_CELLSORT;
   char *w = ctx->work;
@@ -943,15 +948,15 @@ nbs_status nbs__cellsort(nbs__run *run) {
   c.dim = dim;
   c.n = n;
   c.key = (uint64_t *)(void *)w;
-  c.idx = packed ? NULL : (int32_t *)(void *)(w + key_b);
+  c.idx = packed ? NULL : (int32_t *)(void *)(w + at[0]);
   /* the low half of a packed word: the first int32 of it on a little-endian machine */
   c.ids = packed ? (const int32_t *)(const void *)c.key + (NBS__BIG_ENDIAN ? 1 : 0) : c.idx;
   c.istep = packed ? 2 : 1;
-  c.xs = (double *)(void *)(w + key_b + idx_b);
+  c.xs = (double *)(void *)(w + at[1]);
   c.ys = c.xs + nn;
   c.zs = dim == 3 ? c.ys + nn : NULL;
-  c.rs = run->r ? (double *)(void *)(w + key_b + idx_b + xs_b) : NULL;
-  uint32_t *hist = (uint32_t *)(void *)(w + key_b + idx_b + xs_b + rs_b);
+  c.rs = run->r ? (double *)(void *)(w + at[2]) : NULL;
+  uint32_t *hist = (uint32_t *)(void *)(w + at[3]);
   c.d2 = run->d2;
   c.contacts = run->mode == NBS_MODE_CONTACTS;
   c.block = nbs__cs_block_generic;
@@ -1004,8 +1009,7 @@ nbs_status nbs__cellsort(nbs__run *run) {
     }
   }
   /* 2. sort */
-  nbs__radix(k0, packed ? NULL : i0, k1, packed ? NULL : i1, c.key, c.idx, n, c.ks, dg, hist,
-             threads);
+  nbs__radix(k0, i0, k1, i1, c.key, c.idx, n, c.ks, dg, hist, threads);
   for (size_t t = nn; t < nn + NBS__CS_PAD; t++) c.key[t] = UINT64_MAX;
   /* 3. gather */
 #if defined(_OPENMP)
