@@ -11,6 +11,14 @@
  * with one context per algorithm reused over the repeats, as a simulation reuses its
  * context every step. The first detection allocates; the minimum over the repeats is the
  * steady state.
+ * Order: cellsort starts a detection from the last detection's cell order when the elements
+ * have moved little (nbs.h, "time steps"). On a scene that does not move, every repeat
+ * after the first would find nothing to sort, which is not a time step: --fresh makes each
+ * detection sort from scratch (the cold case: a first step, or unrelated inputs), and
+ * --move D moves every element before each repeat after the first by a random step of up
+ * to D diameters per axis (not timed), as a simulation's time step does. The tool is then
+ * named nbs-ALG-steps; after the last step a fresh context detects the same coordinates
+ * from scratch, and the line says whether its pairs were the same bytes (same_as_fresh).
  * Threads: --threads T sets nbs_context_def.threads (default 1: the targets are for one
  * thread; the library's own default, 0, would take every core). With T > 1 the tool is
  * named nbs-ALG-Tt. hash= is an order-sensitive hash of the pair list, so that runs with
@@ -81,10 +89,13 @@ static void usage(FILE *out) {
       "  --direct-max N     largest N for direct by default (default 20000)\n"
       "  --repeats K        detections per algorithm; the minimum time is reported (5)\n"
       "  --min-time T       repeat at least until T seconds have been spent (default 0)\n"
+      "  --fresh            every detection sorts from scratch (nbs_detect_def.fresh)\n"
+      "  --move D           before each repeat after the first, move every element by up\n"
+      "                     to D diameters per axis (time steps; tool nbs-ALG-steps)\n"
       "Output, one line per algorithm:\n"
       "  tool=nbs-ALG[-Tt] status=ok seconds=.. ns_per_element=.. pairs=.. ran=ALG\n"
       "  peak_bytes=.. work_bytes=.. pair_bytes=.. rss_extra_bytes=.. hash=.. threads=..\n"
-      "  n=.. dim=..\n",
+      "  reused=.. moved=.. [same_as_fresh=0|1] n=.. dim=..\n",
       out);
 }
 
@@ -98,6 +109,8 @@ typedef struct options {
   double min_time;
   long long direct_max;
   int threads;
+  int fresh;
+  double move;
 } options;
 
 static int parse_args(int argc, char **argv, options *o) {
@@ -156,6 +169,15 @@ static int parse_args(int argc, char **argv, options *o) {
     } else if (strcmp(a, "--threads") == 0) {
       NEEDS_VALUE;
       o->threads = atoi(v);
+    } else if (strcmp(a, "--fresh") == 0) {
+      o->fresh = 1;
+    } else if (strcmp(a, "--move") == 0) {
+      NEEDS_VALUE;
+      o->move = strtod(v, NULL);
+      if (!(o->move >= 0.0)) {
+        fprintf(stderr, "nbs_bench: --move needs a step >= 0\n");
+        return -1;
+      }
     } else if (strcmp(a, "--sorted") == 0) {
       o->def.sorted = 1;
     } else {
@@ -233,13 +255,37 @@ static unsigned long long pairs_hash(const nbs_pair *pairs, size_t count) {
   return h;
 }
 
+/* Moves every coordinate by up to `step` either way (a time step); splitmix64 draws. */
+static void move_scene(double *coords, size_t count, double step, uint64_t *state) {
+  for (size_t k = 0; k < count; k++) {
+    uint64_t z = (*state += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    z ^= z >> 31;
+    coords[k] += step * (2.0 * ((double)(z >> 11) * 0x1.0p-53) - 1.0);
+  }
+}
+
 /* Runs one algorithm; prints its line. Returns 0, or 1 if it failed for another reason
  * than not fitting the scene (budget, extent). */
 static int run_algorithm(nbs_algorithm alg, const scene *s, const options *o) {
-  nbs_input in = {.dim = s->dim, .n = s->n, .coords = s->coords, .radii = s->radii,
-                  .diameter = s->diameter};
+  const size_t ncoords = (size_t)s->n * (size_t)s->dim;
+  /* time steps move a copy, so that every algorithm starts from the same scene */
+  double *moving = NULL;
+  if (o->move > 0.0) {
+    moving = malloc(ncoords > 0 ? ncoords * sizeof *moving : 1);
+    if (!moving) {
+      fprintf(stderr, "nbs_bench: out of memory\n");
+      return 1;
+    }
+    memcpy(moving, s->coords, ncoords * sizeof *moving);
+  }
+  nbs_input in = {.dim = s->dim, .n = s->n, .coords = moving ? moving : s->coords,
+                  .radii = s->radii, .diameter = s->diameter};
   nbs_detect_def ddef = nbs_default_detect_def();
   ddef.algorithm = alg;
+  ddef.fresh = o->fresh;
+  uint64_t rng = 12345;
   reset_peak_rss();
   long long rss_base = proc_status_bytes("VmRSS:");
   nbs_context *ctx = NULL;
@@ -249,6 +295,7 @@ static int run_algorithm(nbs_algorithm alg, const scene *s, const options *o) {
   double best = -1.0, spent = 0.0;
   int done = 0;
   while (st == NBS_OK && (done < o->repeats || spent < o->min_time)) {
+    if (moving && done > 0) move_scene(moving, ncoords, o->move * s->diameter, &rng);
     double t0 = now_seconds();
     st = nbs_detect(ctx, &in, &ddef);
     double t = now_seconds() - t0;
@@ -258,10 +305,10 @@ static int run_algorithm(nbs_algorithm alg, const scene *s, const options *o) {
   }
   long long rss_extra = proc_status_bytes("VmHWM:") - rss_base;
   char name[64];
-  if (o->threads == 1) {
-    snprintf(name, sizeof name, "%s", nbs_algorithm_name(alg));
-  } else {
-    snprintf(name, sizeof name, "%s-%dt", nbs_algorithm_name(alg), o->threads);
+  snprintf(name, sizeof name, "%s%s", nbs_algorithm_name(alg), moving ? "-steps" : "");
+  if (o->threads != 1) {
+    size_t len = strlen(name);
+    snprintf(name + len, sizeof name - len, "-%dt", o->threads);
   }
   int failed = 0;
   if (st != NBS_OK) {
@@ -276,16 +323,35 @@ static int run_algorithm(nbs_algorithm alg, const scene *s, const options *o) {
     const nbs_pair *pairs = nbs_pairs(ctx, &count);
     nbs_stats stats;
     nbs_last_stats(ctx, &stats);
+    const unsigned long long hash = pairs_hash(pairs, count);
+    /* after time steps: the same coordinates from scratch must give the same bytes */
+    char same[32] = "";
+    if (moving) {
+      nbs_context *fctx = NULL;
+      nbs_detect_def fdef = ddef;
+      fdef.fresh = 1;
+      size_t fcount = 0;
+      int equal = nbs_context_create(&cdef, &fctx) == NBS_OK &&
+                  nbs_detect(fctx, &in, &fdef) == NBS_OK;
+      const nbs_pair *fpairs = equal ? nbs_pairs(fctx, &fcount) : NULL;
+      equal = equal && fcount == count && pairs_hash(fpairs, fcount) == hash;
+      nbs_context_destroy(fctx);
+      snprintf(same, sizeof same, " same_as_fresh=%d", equal);
+      failed = !equal;
+    }
     printf("tool=nbs-%s status=ok seconds=%.9g ns_per_element=%.6g pairs=%zu ran=%s "
            "peak_bytes=%zu work_bytes=%zu pair_bytes=%zu rss_extra_bytes=%lld repeats=%d "
-           "candidates=%llu compressed=%d hash=%016llx threads=%d n=%lld dim=%d\n",
+           "candidates=%llu compressed=%d hash=%016llx threads=%d reused=%d moved=%lld%s "
+           "n=%lld dim=%d\n",
            name, best, s->n > 0 ? 1e9 * best / (double)s->n : 0.0, count,
            nbs_algorithm_name(stats.algorithm), nbs_context_peak_bytes(ctx), stats.work_bytes,
            stats.pair_bytes, rss_extra, done, (unsigned long long)stats.candidates,
-           stats.compressed, pairs_hash(pairs, count), o->threads, (long long)s->n, s->dim);
+           stats.compressed, hash, o->threads, stats.reused_order, (long long)stats.moved, same,
+           (long long)s->n, s->dim);
   }
   fflush(stdout);
   nbs_context_destroy(ctx);
+  free(moving);
   return failed;
 }
 

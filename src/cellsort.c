@@ -870,11 +870,246 @@ static int32_t nbs__cs_row_start(const nbs__cs *c, int32_t p) {
 }
 #endif
 
+/* How a cell key is made from an element's coordinates: (iz, iy, x sub-cell), iz highest.
+ * x counts sub-cells: (x - lo) * (fine / edge), the same roundings as nbs__cell's (the
+ * scaling by a power of two is exact), so the argument of input.c holds with windows of
+ * `fine` sub-cells: |dx| <= edge(1 - margin) stays within them. */
+typedef struct nbs__cs_keying {
+  const nbs__grid *g;
+  double lo_x, inv_fine;
+  int dim, sy, sz; /* where iy and iz start in the key */
+} nbs__cs_keying;
+
+static inline uint64_t nbs__cs_cellkey(const nbs__cs_keying *kg, const double *xk) {
+  const uint64_t ix = (uint64_t)((xk[0] - kg->lo_x) * kg->inv_fine);
+  const uint64_t iy = (uint64_t)nbs__cell(kg->g, xk, 1);
+  const uint64_t iz = kg->dim == 3 ? (uint64_t)nbs__cell(kg->g, xk, 2) : 0;
+  return iz << kg->sz | iy << kg->sy | ix;
+}
+
+/* The warm start: at most this share (1 / it) of the elements may change place. */
+#define NBS__CS_WARM_SHARE 16
+
+/* Starts from the last detection's cell order (nbs_detect's "time steps"). key[] holds it
+ * as packed words, sorted, of the same n elements. One pass reads the elements in that
+ * order, as the gather does, and computes each one's new word. An element whose word is
+ * unchanged keeps its place: it moves down over the places of those taken out before it,
+ * with its coordinates, and these words stay sorted, since they were. An element whose
+ * word changed (it moved to another x sub-cell, row or layer) is taken out to `spare`.
+ * When none changed, that is all: the sort and the gather are skipped (3D, N = 1e6: 33 ->
+ * 30 ns per element in all, see the file comment). Otherwise the few taken out are sorted
+ * (the radix sort, in spare) and merged back from the end. Sorted by the whole word (key,
+ * then element), the result is the order a sort from scratch gives, whose stable passes
+ * leave equal keys in element order: the same pairs in the same order.
+ * Returns false, the arrays then holding nothing of use, when more than n /
+ * NBS__CS_WARM_SHARE elements changed place (the pass stops there: an input that is not a
+ * later state of the same elements stops it within the first sixteenth); the caller sorts
+ * from scratch. With several threads each takes a contiguous part, its own share of spare,
+ * and the parts are closed up before the merge. spare holds 2 n / NBS__CS_WARM_SHARE words. */
+static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_keying *kg,
+                         int eb, int bits, uint64_t *spare, uint32_t *hist, int threads,
+                         int64_t *moved) {
+  const int32_t n = c->n;
+  const int dim = c->dim;
+  const uint64_t emask = c->imask;
+  const int64_t limit = n / NBS__CS_WARM_SHARE, share = limit / threads;
+  uint64_t *key = c->key;
+  double *xs = c->xs, *ys = c->ys, *zs = c->zs, *rs = c->rs;
+  const double *x = run->x, *r = run->r;
+  int32_t kept[NBS__THREADS_MAX];
+  int64_t out[NBS__THREADS_MAX];
+  bool over = false;
+#if defined(_OPENMP)
+#pragma omp parallel num_threads(threads) if (threads > 1) reduction(|| : over)
+#endif
+  {
+    int t = 0;
+#if defined(_OPENMP)
+    t = omp_get_thread_num();
+#endif
+    const int32_t from = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
+    uint64_t *mine = spare + (size_t)t * (size_t)share;
+    int32_t k = from;
+    int64_t m = 0;
+    for (int32_t p = from; p < to; p++) {
+      /* the gather's prefetch; key[pa] is still the last order's word */
+      const int32_t pa = p + NBS__CS_AHEAD < n ? p + NBS__CS_AHEAD : p;
+      const int32_t ahead = (int32_t)(key[pa] & emask);
+      __builtin_prefetch(x + (size_t)ahead * (size_t)dim);
+      __builtin_prefetch(x + (size_t)ahead * (size_t)dim + (dim - 1));
+      if (rs) __builtin_prefetch(r + ahead);
+      const uint64_t old = key[p];
+      const int32_t e = (int32_t)(old & emask);
+      const double *xk = x + (size_t)e * (size_t)dim;
+      const uint64_t w = nbs__cs_cellkey(kg, xk) << eb | (uint64_t)e;
+      if (w == old) {
+        key[k] = w;
+        xs[k] = xk[0];
+        ys[k] = xk[1];
+        if (dim == 3) zs[k] = xk[2];
+        if (rs) rs[k] = r[e];
+        k++;
+      } else if (m < share) {
+        mine[m++] = w;
+      } else {
+        over = true;
+        break;
+      }
+    }
+    kept[t] = k - from;
+    out[t] = m;
+  }
+  *moved = 0;
+  if (over) return false;
+  int64_t m = 0;
+  for (int t = 0; t < threads; t++) m += out[t];
+  if (m == 0) return true;
+
+  /* close up the parts (each thread's kept elements, and its words taken out) */
+  int32_t k = kept[0];
+  int64_t j = out[0];
+  for (int t = 1; t < threads; t++) {
+    const int32_t from = nbs__chunk(n, t, threads);
+    const size_t len = (size_t)kept[t];
+    memmove(key + k, key + from, len * sizeof *key);
+    memmove(xs + k, xs + from, len * sizeof *xs);
+    memmove(ys + k, ys + from, len * sizeof *ys);
+    if (dim == 3) memmove(zs + k, zs + from, len * sizeof *zs);
+    if (rs) memmove(rs + k, rs + from, len * sizeof *rs);
+    k += kept[t];
+    memmove(spare + j, spare + (size_t)t * (size_t)share, (size_t)out[t] * sizeof *spare);
+    j += out[t];
+  }
+  nbs__radix(spare, NULL, spare + limit, NULL, spare, NULL, (int32_t)m, 0,
+             nbs__radix_digits(bits + eb), hist, 1);
+  /* merge from the end: place p takes the larger of the last kept and the last taken out */
+  int32_t i = k - 1, p = n - 1;
+  for (j = m - 1; j >= 0; p--) {
+    if (i >= 0 && key[i] > spare[j]) {
+      key[p] = key[i];
+      xs[p] = xs[i];
+      ys[p] = ys[i];
+      if (dim == 3) zs[p] = zs[i];
+      if (rs) rs[p] = rs[i];
+      i--;
+    } else {
+      /* the elements taken out are few and anywhere: ask for the coordinates of the one
+       * eight insertions ahead */
+      if (j >= 8) {
+        const size_t ea = (size_t)(spare[j - 8] & emask) * (size_t)dim;
+        __builtin_prefetch(x + ea);
+        __builtin_prefetch(x + ea + (dim - 1));
+        if (rs) __builtin_prefetch(r + (spare[j - 8] & emask));
+      }
+      const uint64_t w = spare[j--];
+      const int32_t e = (int32_t)(w & emask);
+      const double *xk = x + (size_t)e * (size_t)dim;
+      key[p] = w;
+      xs[p] = xk[0];
+      ys[p] = xk[1];
+      if (dim == 3) zs[p] = xk[2];
+      if (rs) rs[p] = r[e];
+    }
+  }
+  *moved = m;
+  return true;
+}
+
+/* From scratch: 1. the keys in element order, 2. their radix sort, 3. the gather of the
+ * coordinates (and radii) in cell order. */
+static void nbs__cs_sort_gather(const nbs__cs *c, const nbs__run *run, const nbs__cs_keying *kg,
+                                bool packed, int eb, int bits, uint32_t *hist, int threads) {
+  const int32_t n = c->n;
+  const size_t nn = (size_t)n;
+  const int dim = c->dim;
+  const double *x = run->x;
+  const nbs__digits dg = nbs__radix_digits(bits);
+  /* The sort's scratch is the coordinate array, not yet filled (8 or 12 of its >= 16 bytes
+   * per element). Passes alternate between it and key[]: with an odd number of them the
+   * keys start in the scratch, so that they end in key[] without a copy (unless a pass is
+   * skipped). */
+  uint64_t *tk = (uint64_t *)(void *)c->xs;
+  int32_t *ti = packed ? NULL : (int32_t *)(void *)(c->xs + nn);
+  const uint64_t emask = c->imask;
+  const bool odd = dg.passes % 2 == 1;
+  uint64_t *k0 = odd ? tk : c->key, *k1 = odd ? c->key : tk;
+  int32_t *i0 = odd ? ti : c->idx, *i1 = odd ? c->idx : ti;
+  /* 1. keys */
+#if defined(_OPENMP)
+#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
+#endif
+  for (int32_t k = 0; k < n; k++) {
+    const uint64_t kk = nbs__cs_cellkey(kg, x + (size_t)k * (size_t)dim);
+    if (packed) {
+      k0[k] = kk << eb | (uint64_t)k;
+    } else {
+      k0[k] = kk;
+      i0[k] = k;
+    }
+  }
+  /* 2. sort */
+  nbs__radix(k0, i0, k1, i1, c->key, c->idx, n, c->ks, dg, hist, threads);
+  /* 3. gather */
+#if defined(_OPENMP)
+#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
+#endif
+  for (int32_t p = 0; p < n; p++) {
+    /* ask for an element a few iterations ahead: the reads are random */
+    const int32_t pa = p + NBS__CS_AHEAD < n ? p + NBS__CS_AHEAD : p;
+    const int32_t ahead = packed ? (int32_t)(c->key[pa] & emask) : c->idx[pa];
+    /* both ends: in 3D a quarter of the elements straddle two cache lines */
+    __builtin_prefetch(x + (size_t)ahead * (size_t)dim);
+    __builtin_prefetch(x + (size_t)ahead * (size_t)dim + (dim - 1));
+    if (c->rs) __builtin_prefetch(run->r + ahead);
+    const int32_t e = packed ? (int32_t)(c->key[p] & emask) : c->idx[p];
+    const double *xk = x + (size_t)e * (size_t)dim;
+    c->xs[p] = xk[0];
+    c->ys[p] = xk[1];
+    if (dim == 3) c->zs[p] = xk[2];
+    if (c->rs) c->rs[p] = run->r[e];
+  }
+}
+
 bool nbs__cellsort_fits(const nbs__grid *g) {
   if (!g->fits) return false;
   int bits = 0;
   for (int a = 0; a < g->dim; a++) bits += nbs__bits((uint64_t)g->n[a]);
   return bits <= 64;
+}
+
+/* cellsort's grid: on each axis the origin of the last detection (ctx->cs_origin), or a
+ * new one, a multiple of the cell edge one edge or two below the lowest coordinate, so
+ * that the cells, and so the keys, stay where they are from step to step: the start from
+ * the last order compares words, and with the origin at the lowest element a step of that
+ * one element would move every cell and change every key. The last origin is kept while
+ * the lowest coordinate lies less than 4 edges above it. The grid is kept only when its
+ * cells need the same bits in all as input.c's, so that it never changes whether the key
+ * fits or is packed; otherwise, and where the origin cannot be computed exactly enough
+ * (|lo| huge next to the edge), the grid stays as input.c made it. input.c's rounding
+ * argument holds for any origin at or below the lowest coordinate. */
+static void nbs__cs_anchor(nbs_context *ctx, nbs__grid *g) {
+  if (!g->fits || !(g->inv_edge > 0.0)) return;
+  nbs__grid a = *g;
+  const double e = g->edge;
+  int before = 0, after = 0;
+  for (int ax = 0; ax < g->dim; ax++) {
+    double lo = ctx->cs_origin[ax];
+    if (!(ctx->cs_edge == e && lo <= g->lo[ax] && g->lo[ax] - lo < 4.0 * e)) {
+      lo = (floor(g->lo[ax] * g->inv_edge) - 1.0) * e;
+      if (lo > g->lo[ax] - e) lo -= e;
+      if (!(lo <= g->lo[ax] && g->lo[ax] - lo < 4.0 * e)) return;
+    }
+    const double top = (g->hi[ax] - lo) * g->inv_edge;
+    if (!(top < (double)NBS__AXIS_MAX)) return;
+    a.lo[ax] = lo;
+    a.n[ax] = (int64_t)top + 1;
+    before += nbs__bits((uint64_t)g->n[ax]);
+    after += nbs__bits((uint64_t)a.n[ax]);
+  }
+  if (after != before) return;
+  *g = a;
+  for (int ax = 0; ax < g->dim; ax++) ctx->cs_origin[ax] = a.lo[ax];
+  ctx->cs_edge = e;
 }
 
 /* The work block's layout: key[n + pad] | idx[n, padded to 8 bytes; used by unpacked keys
@@ -900,7 +1135,8 @@ size_t nbs__cellsort_bytes(int dim, int32_t n, bool radii, int threads) {
 
 nbs_status nbs__cellsort(nbs__run *run) {
   nbs_context *ctx = run->ctx;
-  const nbs__grid *g = &run->grid;
+  nbs__grid anchored = run->grid;
+  const nbs__grid *g = &anchored;
   const int dim = run->dim;
   const int32_t n = run->n;
   run->ran = NBS_CELLSORT;
@@ -919,6 +1155,10 @@ nbs_status nbs__cellsort(nbs__run *run) {
                      "cellsort: %lld x %lld x %lld cells need a %d-bit key; use 'auto'",
                      (long long)nx, (long long)ny, (long long)nz, bx + by + bz);
   }
+  nbs__cs_anchor(ctx, &anchored); /* the same bits: it still fits */
+  nx = g->n[0];
+  ny = g->n[1];
+  nz = dim == 3 ? g->n[2] : 1;
   /* The key shares its word with the element when both fit, key << eb | element with eb
    * the bits of n - 1: the sort then moves 8 bytes per element and pass instead of 12, and
    * the sweep reads one array for both. At most 63 bits in all, so that the padding after
@@ -941,7 +1181,10 @@ nbs_status nbs__cellsort(nbs__run *run) {
   size_t at[4];
   const size_t bytes = nbs__cs_layout(dim, n, run->r != NULL, threads, at);
   NBS__TRY(nbs__work_reserve(ctx, bytes));
+  /* the last detection's cell order, when it is there (a new block holds none) */
+  const bool had_order = ctx->work_kind == NBS__WORK_CELLSORT && ctx->cs_order_n == n;
   ctx->work_kind = NBS__WORK_CELLSORT;
+  ctx->cs_order_n = 0; /* no order until this detection's is complete */
   char *w = ctx->work;
   nbs__cs c;
   c.run = run;
@@ -956,7 +1199,6 @@ nbs_status nbs__cellsort(nbs__run *run) {
   c.ys = c.xs + nn;
   c.zs = dim == 3 ? c.ys + nn : NULL;
   c.rs = run->r ? (double *)(void *)(w + at[2]) : NULL;
-  uint32_t *hist = (uint32_t *)(void *)(w + at[3]);
   c.d2 = run->d2;
   c.contacts = run->mode == NBS_MODE_CONTACTS;
   c.block = nbs__cs_block_generic;
@@ -974,62 +1216,35 @@ nbs_status nbs__cellsort(nbs__run *run) {
   c.imask = packed ? (uint32_t)(((uint64_t)1 << eb) - 1) : UINT32_MAX;
   run->work_bytes = bytes;
 
-  /* 1. keys */
-  const double *x = run->x;
-  const int sy = bx, sz = bx + by;
-  /* x in sub-cells: (x - lo) * (NBS__CS_FINE / edge), the same roundings as nbs__cell's
-   * (the scaling by a power of two is exact), so the argument of input.c holds with
-   * windows of `fine` sub-cells: |dx| <= edge(1 - margin) stays within them */
-  const double inv_fine = g->inv_edge * (double)((uint64_t)1 << fine_bits);
-  const double lo_x = g->lo[0];
-  const nbs__digits dg = nbs__radix_digits(bits);
-  /* The sort's scratch is the coordinate array, not yet filled (8 or 12 of its >= 16 bytes
-   * per element). Passes alternate between it and key[]: with an odd number of them the
-   * keys start in the scratch, so that they end in key[] without a copy (unless a pass is
-   * skipped). */
-  uint64_t *tk = (uint64_t *)(void *)c.xs;
-  int32_t *ti = packed ? NULL : (int32_t *)(void *)(c.xs + nn);
-  const uint64_t emask = c.imask;
-  const bool odd = dg.passes % 2 == 1;
-  uint64_t *k0 = odd ? tk : c.key, *k1 = odd ? c.key : tk;
-  int32_t *i0 = odd ? ti : c.idx, *i1 = odd ? c.idx : ti;
-#if defined(_OPENMP)
-#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
-#endif
-  for (int32_t k = 0; k < n; k++) {
-    const double *xk = x + (size_t)k * (size_t)dim;
-    uint64_t ix = (uint64_t)((xk[0] - lo_x) * inv_fine), iy = (uint64_t)nbs__cell(g, xk, 1);
-    uint64_t iz = dim == 3 ? (uint64_t)nbs__cell(g, xk, 2) : 0;
-    const uint64_t kk = iz << sz | iy << sy | ix;
-    if (packed) {
-      k0[k] = kk << eb | (uint64_t)k;
+  nbs__cs_keying kg;
+  kg.g = g;
+  kg.lo_x = g->lo[0];
+  kg.inv_fine = g->inv_edge * (double)((uint64_t)1 << fine_bits);
+  kg.dim = dim;
+  kg.sy = bx;
+  kg.sz = bx + by;
+  uint32_t *hist = (uint32_t *)(void *)(w + at[3]);
+
+  /* 0. from the last detection's order, when the elements have moved little since */
+  bool warm = false;
+  if (had_order && packed && !run->fresh) {
+    if (ctx->cs_warm_wait > 0) {
+      ctx->cs_warm_wait--;
     } else {
-      k0[k] = kk;
-      i0[k] = k;
+      warm = nbs__cs_warm(&c, run, &kg, eb, bits, (uint64_t *)(void *)(w + at[0]), hist,
+                          threads, &run->moved);
+      if (!warm && ctx->cs_warm_fails < 6) ctx->cs_warm_fails++;
+      if (warm) ctx->cs_warm_fails = 0;
+      ctx->cs_warm_wait = warm ? 0 : 1 << ctx->cs_warm_fails;
     }
   }
-  /* 2. sort */
-  nbs__radix(k0, i0, k1, i1, c.key, c.idx, n, c.ks, dg, hist, threads);
-  for (size_t t = nn; t < nn + NBS__CS_PAD; t++) c.key[t] = UINT64_MAX;
-  /* 3. gather */
-#if defined(_OPENMP)
-#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
-#endif
-  for (int32_t p = 0; p < n; p++) {
-    /* ask for an element a few iterations ahead: the reads are random */
-    const int32_t pa = p + NBS__CS_AHEAD < n ? p + NBS__CS_AHEAD : p;
-    const int32_t ahead = packed ? (int32_t)(c.key[pa] & emask) : c.idx[pa];
-    /* both ends: in 3D a quarter of the elements straddle two cache lines */
-    __builtin_prefetch(x + (size_t)ahead * (size_t)dim);
-    __builtin_prefetch(x + (size_t)ahead * (size_t)dim + (dim - 1));
-    if (c.rs) __builtin_prefetch(run->r + ahead);
-    const int32_t e = packed ? (int32_t)(c.key[p] & emask) : c.idx[p];
-    const double *xk = x + (size_t)e * (size_t)dim;
-    c.xs[p] = xk[0];
-    c.ys[p] = xk[1];
-    if (dim == 3) c.zs[p] = xk[2];
-    if (c.rs) c.rs[p] = run->r[e];
+  run->reused_order = warm;
+  if (!warm) {
+    run->moved = 0;
+    nbs__cs_sort_gather(&c, run, &kg, packed, eb, bits, hist, threads);
   }
+  for (size_t t = nn; t < nn + NBS__CS_PAD; t++) c.key[t] = UINT64_MAX;
+  if (packed) ctx->cs_order_n = n;
 
   /* 4. sweep: thread t takes the elements [n t / T, n (t + 1) / T) of the cell order */
   nbs__sink sinks[NBS__THREADS_MAX];

@@ -389,6 +389,7 @@ nbs_status nbs_detect(nbs_context *ctx, const nbs_input *in, const nbs_detect_de
   run.mode = d.mode;
   run.callback = d.callback;
   run.user = d.user;
+  run.fresh = d.fresh != 0;
   NBS__TRY(nbs__prepare(&run, in));
 
   nbs_algorithm algo = d.algorithm == NBS_AUTO ? nbs__choose(&run) : d.algorithm;
@@ -426,6 +427,8 @@ nbs_status nbs_detect(nbs_context *ctx, const nbs_input *in, const nbs_detect_de
   st->compressed = run.compressed;
   st->work_bytes = run.work_bytes;
   st->pair_bytes = ctx->pairs_cap * sizeof(nbs_pair);
+  st->reused_order = run.reused_order;
+  st->moved = run.moved;
   if (s != NBS_OK) return s;
 
   ctx->pairs_count = run.callback ? 0 : run.count;

@@ -84,6 +84,16 @@ struct nbs_context {
   size_t work_size;
   int work_kind;
   int64_t work_cap[4];
+  /* cellsort's cell order: when work_kind is NBS__WORK_CELLSORT and cs_order_n is n (> 0),
+   * the work block's key array holds the packed words (key << eb | element) of the last
+   * detection of n elements, sorted: the next detection may start from it (cellsort.c). */
+  int32_t cs_order_n;
+  /* After a start from it fails (too many elements changed place), the next cs_warm_wait
+   * detections sort from scratch without trying: 2, 4, ... 64 after 1, 2, ... 6 failures in
+   * a row (cs_warm_fails), so that steps that keep failing stop paying for the try. */
+  int cs_warm_wait, cs_warm_fails;
+  /* the origin of cellsort's grid in the last detection, and its cell edge (cellsort.c) */
+  double cs_origin[3], cs_edge;
 
   /* The pair buffer (buffer mode) and the batch used in callback mode. */
   nbs_pair *pairs;
@@ -125,6 +135,9 @@ typedef struct nbs__run {
   size_t work_bytes;
   bool compressed;
   int64_t cells[3];
+  bool fresh;         /* nbs_detect_def.fresh */
+  bool reused_order;  /* cellsort started from the last cell order */
+  int64_t moved;      /* the elements it sorted again */
 } nbs__run;
 
 /* ---- memory (context.c) ---- */

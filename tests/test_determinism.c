@@ -2,6 +2,8 @@
  * Determinism: the same input gives byte-identical pairs
  *   - across runs: repeated detections, fresh contexts, contexts that held another layout,
  *     and the callback sink, each in the algorithm's own order (not sorted);
+ *   - across time steps: cellsort's start from the last detection's cell order gives the
+ *     bytes of a detection from scratch, whatever the elements did since;
  *   - across thread counts: cellsort (and auto) with 1, 2, 3, 4, 7 and 8 threads, in order;
  *   - across kernels: cellsort's AVX-512 kernel (where the processor has it) and its generic
  *     one (NBS_SIMD=generic), in order, and so does the AVX2 one (NBS_SIMD=avx2);
@@ -336,6 +338,158 @@ static void test_thread_counts(void) {
   }
 }
 
+/* Moves elements k = first, first + every, ... by up to amp per axis (amp < 0: by -amp
+ * or 0 or amp, exactly: quantized scenes stay on their grid). */
+static void det_move(scene *s, int64_t first, int64_t every, double amp, uint64_t *rng) {
+  for (int64_t k = first; k < s->n; k += every) {
+    for (int a = 0; a < s->dim; a++) {
+      const double u = det_uniform(rng);
+      s->coords[k * s->dim + a] += amp >= 0 ? amp * (2.0 * u - 1.0)
+                                            : -amp * (double)((int)(u * 3.0) - 1);
+    }
+  }
+}
+
+/* One step: ctx detects s (its pairs in order, through the buffer or a callback) and a
+ * fresh context detects it from scratch (def.fresh); the bytes must be the same. Returns
+ * the stepping context's statistics in *st. */
+static void det_step(nbs_context *ctx, const nbs_context_def *cdef, const scene *s,
+                     nbs_algorithm algo, nbs_mode mode, bool callback, nbs_stats *st,
+                     const char *what) {
+  pair_list got, ref;
+  nbs_status sg = callback ? detect_callback(ctx, s, algo, mode, &got)
+                           : detect_raw(ctx, s, algo, mode, &got);
+  ASSERT_OK(sg);
+  ASSERT_OK(nbs_last_stats(ctx, st));
+  nbs_context *fresh;
+  ASSERT_OK(nbs_context_create(cdef, &fresh));
+  nbs_input in = scene_input(s);
+  nbs_detect_def def = nbs_default_detect_def();
+  def.algorithm = algo;
+  def.mode = mode;
+  def.fresh = 1;
+  ASSERT_OK(nbs_detect(fresh, &in, &def));
+  nbs_stats fs;
+  ASSERT_OK(nbs_last_stats(fresh, &fs));
+  CHECK_EQ(fs.reused_order, 0);
+  size_t count;
+  const nbs_pair *p = nbs_pairs(fresh, &count);
+  ref.p = malloc((count ? count : 1) * sizeof *ref.p);
+  if (!ref.p) abort();
+  if (count) memcpy(ref.p, p, count * sizeof *p);
+  ref.count = count;
+  CHECK_MSG(same_bytes(&got, &ref), "%s: %zu pairs, %zu from scratch (reused %d, moved %lld)",
+            what, got.count, ref.count, st->reused_order, (long long)st->moved);
+  pair_list_free(&got);
+  pair_list_free(&ref);
+  nbs_context_destroy(fresh);
+}
+
+/* Time steps: cellsort (and auto) start a detection from the last one's cell order
+ * (nbs.h). Through steps that move the elements a little (and sometimes not at all), move
+ * them far, replace them, change n, the dimension or the radii, or follow another
+ * algorithm in the same context, every detection gives the bytes of a detection from
+ * scratch, in order, in both modes, through the buffer and a callback, with 1 to 4
+ * threads. The statistics must show the order reused with elements re-sorted on small
+ * steps, and not reused on an input of other elements, so that both paths are taken. */
+static void test_time_steps(void) {
+  const det_kind kinds[] = {DET_UNIFORM, DET_QUANTIZED, DET_RADII};
+  for (int dim = 2; dim <= 3; dim++) {
+    for (size_t kd = 0; kd < sizeof kinds / sizeof *kinds; kd++) {
+      const det_kind kind = kinds[kd];
+      const double box = dim == 2 ? 140.0 : 26.0; /* about 0.5 fraction with 20000 */
+      for (int threads = 1; threads <= 4; threads++) {
+        for (int variant = 0; variant < 3; variant++) {
+          /* 0: contacts through the buffer, 1: candidates, 2: contacts through a callback */
+          const nbs_mode mode = variant == 1 ? NBS_MODE_CANDIDATES : NBS_MODE_CONTACTS;
+          const bool cb = variant == 2;
+          const nbs_algorithm algo = variant == 1 ? NBS_CELLSORT : NBS_AUTO;
+          char what[160];
+          nbs_context_def cdef = nbs_default_context_def();
+          cdef.threads = threads;
+          nbs_context *ctx;
+          ASSERT_OK(nbs_context_create(&cdef, &ctx));
+          scene s = det_scene(kind, dim, 20000, box, 0.0, 30 + kd);
+          uint64_t rng = 77;
+          const double small = kind == DET_QUANTIZED ? -0.125 : 0.01;
+          nbs_stats st;
+          int64_t moved = 0;
+#define STEP(label)                                                                             do {                                                                                            snprintf(what, sizeof what, "%dD kind %d, %d threads, variant %d: %s", dim, (int)kind,                 threads, variant, label);                                                            det_step(ctx, &cdef, &s, algo, mode, cb, &st, what);                                          if (test_failures) break;                                                                   } while (0)
+          do {
+            STEP("first");
+            CHECK_EQ(st.reused_order, 0);
+            STEP("unmoved");
+            CHECK_EQ(st.reused_order, 1);
+            CHECK_EQ(st.moved, 0);
+            for (int k = 0; k < 6; k++) {
+              /* one element in 7 by a hundredth, one in 61 by a sub-cell (quantized): either
+               * way fewer than n / 16 change place */
+              det_move(&s, k, kind == DET_QUANTIZED ? 61 : 7, small, &rng);
+              STEP("small step");
+              CHECK_EQ(st.reused_order, 1);
+              moved += st.moved;
+            }
+            CHECK_MSG(moved > 0, "%s: no element changed place in six steps", what);
+            det_move(&s, 0, 1, 5.0, &rng); /* every element, up to 5 diameters */
+            STEP("far step");
+            CHECK_EQ(st.reused_order, 0);
+            for (int k = 0; k < 4; k++) STEP("after a far step"); /* waits, then reuses */
+            CHECK_EQ(st.reused_order, 1);
+            scene other = det_scene(kind, dim, 20000, box, 3.0, 90 + kd);
+            scene keep = s;
+            s = other;
+            STEP("other elements");
+            CHECK_EQ(st.reused_order, 0);
+            s = keep;
+            scene_free(&other);
+            for (int k = 0; k < 8; k++) STEP("the first elements again");
+            if (threads == 1 && !cb && mode == NBS_MODE_CONTACTS) {
+              pair_list scratch;
+              ASSERT_OK(detect_raw(ctx, &s, NBS_NBS, NBS_MODE_CONTACTS, &scratch));
+              pair_list_free(&scratch);
+              STEP("after nbs");
+              CHECK_EQ(st.reused_order, 0);
+              scene fewer = s;
+              fewer.n = s.n - 1;
+              scene keep2 = s;
+              s = fewer;
+              STEP("one element fewer");
+              CHECK_EQ(st.reused_order, 0);
+              STEP("one element fewer, again");
+              CHECK_EQ(st.reused_order, 1);
+              s = keep2;
+              STEP("all elements");
+              CHECK_EQ(st.reused_order, 0);
+            }
+          } while (0);
+#undef STEP
+          scene_free(&s);
+          nbs_context_destroy(ctx);
+          if (test_failures) return;
+        }
+      }
+    }
+  }
+  /* the dimension and the radii change, with the same n */
+  nbs_context *ctx;
+  ASSERT_OK(nbs_context_create(NULL, &ctx));
+  nbs_context_def cdef = nbs_default_context_def();
+  scene s3 = det_scene(DET_UNIFORM, 3, 12000, 23.0, 0.0, 41);
+  scene s2 = det_scene(DET_UNIFORM, 2, 12000, 110.0, 0.0, 42);
+  scene sr = det_scene(DET_RADII, 3, 12000, 23.0, 0.0, 43);
+  nbs_stats st;
+  const scene *seq[] = {&s3, &s3, &s2, &s2, &s3, &sr, &sr, &s3};
+  for (size_t k = 0; k < sizeof seq / sizeof *seq && !test_failures; k++) {
+    char what[64];
+    snprintf(what, sizeof what, "dimension and radii, step %zu", k);
+    det_step(ctx, &cdef, seq[k], NBS_CELLSORT, NBS_MODE_CONTACTS, false, &st, what);
+  }
+  scene_free(&s3);
+  scene_free(&s2);
+  scene_free(&sr);
+  nbs_context_destroy(ctx);
+}
+
 /* Kernels: cellsort's generic kernel (asked for with NBS_SIMD=generic, read when a context
  * is created) gives the same bytes in the same order as the one the processor gets by
  * default and as the AVX2 one (NBS_SIMD=avx2), on every case and both modes. Where the
@@ -446,6 +600,7 @@ int main(int argc, char **argv) {
       {"repeat_runs", test_repeat_runs},
       {"thread_counts", test_thread_counts},
       {"kernels", test_kernels},
+      {"time_steps", test_time_steps},
       {"golden_hashes", test_golden_hashes},
   };
   int rc = test_main(argc, argv, tests, sizeof tests / sizeof *tests);

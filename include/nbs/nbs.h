@@ -199,11 +199,19 @@ typedef struct nbs_detect_def {
   void *user;              /* passed to callback */
   int sorted;              /* 1: sort the buffer's pairs by i, then j, in place (the same list
                             * for every algorithm and thread count); ignored with a callback */
+  int fresh;               /* 1: cellsort sorts from scratch even when the context holds the
+                            * cell order of a last detection of the same n (see below) */
 } nbs_detect_def;
 
 NBS_API nbs_detect_def nbs_default_detect_def(void);
 
-/* Finds the pairs of `in`. def may be NULL for the defaults. Without a callback the pairs
+/* Finds the pairs of `in`. def may be NULL for the defaults.
+ * Time steps: cellsort (and auto, when it runs cellsort) keeps the cell order it sorted the
+ * elements into. The next detection of the same n reads the elements in that order, and
+ * when they have moved little since (a time step) it re-sorts only the few that changed
+ * place instead of sorting all of them. The pairs and their order are exactly those of a
+ * detection from scratch; only the time differs. Inputs that are not a later state of the
+ * same elements are recognised early and sorted from scratch. def.fresh = 1 turns it off. Without a callback the pairs
  * replace the context's buffer (nbs_pairs); with one they are delivered in batches and the
  * buffer is left empty. After a first detection, a detection with the same or a smaller n
  * (and a domain of no more cells per axis) allocates nothing, unless it finds more pairs
@@ -229,6 +237,8 @@ typedef struct nbs_stats {
   int compressed;      /* 1 if the axes were compressed because the grid was too large */
   size_t work_bytes;   /* bytes of the algorithm's arrays during this detection */
   size_t pair_bytes;   /* bytes of the pair buffer */
+  int reused_order;    /* 1 if cellsort started from the last detection's cell order */
+  int64_t moved;       /* then: elements that changed place in it and were sorted again */
 } nbs_stats;
 
 /* Statistics of the last detection (also after NBS_ERR_PAIRS: pairs then counts what was
