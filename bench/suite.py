@@ -6,6 +6,13 @@ with the shared scene generators and written to a raw f64 file; every nbs algori
 timed on it in that process, then every peer driver on the same file, one after another in
 the same run. Each tool reports the number of contact pairs; all must agree.
 
+Every nbs row is a detection from scratch (nbs_bench --fresh): the same elements detected
+again are not a time step, and cellsort would find them already in order. Time steps are
+rows of their own, nbs-ALG-steps (--steps, uniform scenes): every element moves by up to D
+diameters per axis before each detection (not timed), the context kept from step to step,
+as in a simulation; they agree when the last step's pairs are the bytes of a detection from
+scratch of the same coordinates (same_as_fresh), since moved elements have other contacts.
+
 Results: <out>/results.csv (one row per case and tool), <out>/summary.md (headline table
 and targets, computed from the rows), <out>/machine.txt and PNG plots.
 """
@@ -92,7 +99,7 @@ class Suite:
         path = os.path.join(a.workdir, f"{scene}-{dim}d-{order}-{n}-{spacing or 'x'}.f64")
         gen_scene = "uniform" if scene == "density" else scene
         timing = ["--repeats", str(a.repeats), "--min-time", str(a.min_time), "--direct-max",
-                  str(a.direct_max)]
+                  str(a.direct_max), "--fresh"]
         cmd = [f"{self.bin}/nbs_bench", "--scene", gen_scene, "--dim", str(dim), "--n", str(n),
                "--fraction", repr(fraction), "--seed", str(a.seed), "--write", path] + timing
         if "nbs" not in tools:
@@ -117,6 +124,20 @@ class Suite:
                                          str(dim), "--threads", str(t), "--algorithms",
                                          ",".join(talgs)] + timing, f"nbs-threads{t}",
                                         a.timeout)
+                results += res
+        # Time steps: the elements move a little before each detection.
+        if "nbs" in tools and a.steps > 0 and scene == "uniform" and a.step_algorithms:
+            salgs = [x for x in a.step_algorithms if x in have]
+            steps = [x for x in timing if x != "--fresh"] + ["--move", repr(a.steps)]
+            for t in [1] + (a.threads if n >= a.threads_min_n else []):
+                res, err = self.run_cmd([f"{self.bin}/nbs_bench", "--file", path, "--dim",
+                                         str(dim), "--threads", str(t), "--algorithms",
+                                         ",".join(salgs)] + steps, f"nbs-steps{t}", a.timeout)
+                for r in res:
+                    if r.get("status") == "ok":
+                        r["note"] = (f"steps of {a.steps:g} diameters per axis; the last "
+                                     f"re-sorted {r.get('moved', '?')} elements "
+                                     f"(reused order: {r.get('reused', '?')})")
                 results += res
         for peer in [t for t in PEERS if t in tools]:
             skip = self.skip_peer(peer, scene, dim, n, path)
@@ -191,7 +212,17 @@ class Suite:
                 row["peak_bytes"] = r.get("peak_bytes", "")
             elif r["tool"] in ("nanoflann", "cgal", "scipy"):
                 row["peak_bytes"] = r.get("rss_extra_bytes", "")
-            if row["status"] == "ok":
+            if row["status"] == "ok" and "same_as_fresh" in r:
+                # time steps: other coordinates, checked against a detection from scratch
+                row["agree"] = "yes" if r["same_as_fresh"] == "1" else "NO"
+                if row["agree"] == "NO":
+                    self.fail(tag, r["tool"], "after time steps, the pairs differ from a "
+                              "detection from scratch of the same coordinates")
+                if one and one.get("hash") and one.get("hash") != r.get("hash"):
+                    row["agree"] = "NO"
+                    self.fail(tag, r["tool"], f"pair list differs from {one['tool']} "
+                              f"(hash {r.get('hash')} vs {one['hash']})")
+            elif row["status"] == "ok":
                 if int(r["pairs"]) == int(ref["pairs"]):
                     row["agree"] = "yes"
                 else:
@@ -395,6 +426,17 @@ def summary(rows, n_head):
     sc = get("scipy")
     target("auto >= 40x scipy (3D)", None if auto3 is None or sc is None else sc / auto3 >= 40,
            f"ratio {f'{sc / auto3:.1f}' if auto3 and sc else 'n/a'}")
+    # Time steps, like for like with LAMMPS, which also works on an order it keeps (its own
+    # spatial sort) from step to step; the elements move between nbs's detections, LAMMPS's
+    # atoms do not.
+    steps3, l3, s3 = get("nbs-auto-steps"), get("lammps"), get("scipy")
+    target("auto in time steps >= 6x lammps (3D)",
+           None if steps3 is None or l3 is None else l3 / steps3 >= 6,
+           f"auto-steps {f(steps3)} ns, lammps {f(l3)} ns, ratio "
+           f"{f'{l3 / steps3:.2f}' if steps3 and l3 else 'n/a'}")
+    target("auto in time steps >= 40x scipy (3D)",
+           None if steps3 is None or s3 is None else s3 / steps3 >= 40,
+           f"ratio {f'{s3 / steps3:.1f}' if steps3 and s3 else 'n/a'}")
     for lm in ("lammps", "lammps-nosort"):
         l3 = get(lm)
         target(f"nbs >= 1.5x {lm} (3D)", None if nbs3 is None or l3 is None else l3 / nbs3 >= 1.5,
@@ -455,7 +497,7 @@ def summary(rows, n_head):
     return "\n".join(out) + "\n"
 
 
-STYLE = {"nbs-auto": ("C0", "o"), "nbs-auto-2t": ("C0", "1"), "nbs-cellsort": ("C9", "d"),
+STYLE = {"nbs-auto": ("C0", "o"), "nbs-auto-2t": ("C0", "1"), "nbs-auto-steps": ("C0", "+"), "nbs-cellsort": ("C9", "d"),
          "nbs-nbs": ("C1", "s"), "nbs-sorting": ("C2", "^"), "nbs-screening": ("C3", "v"),
          "nbs-direct": ("C7", "x"), "nanoflann": ("C4", "D"), "cgal": ("C5", "P"),
          "scipy": ("C6", "*"), "lammps": ("k", "h"), "lammps-nosort": ("C8", "<")}
@@ -464,8 +506,8 @@ SCENE_ORDER = {"uniform": 0, "sparse": 1, "clustered": 2, "huge": 3}
 
 def tool_rank(tool):
     """auto first, then the other nbs algorithms, their thread runs, then the peers."""
-    order = ["nbs-auto", "nbs-cellsort", "nbs-nbs", "nbs-sorting", "nbs-screening",
-             "nbs-direct"]
+    order = ["nbs-auto", "nbs-auto-steps", "nbs-cellsort", "nbs-nbs", "nbs-sorting",
+             "nbs-screening", "nbs-direct"]
     if tool in order:
         return (0, order.index(tool), tool)
     if tool.startswith("nbs-"):
@@ -617,6 +659,10 @@ def main(argv):
                     help="extra thread counts for --thread-algorithms ('' for none); "
                          "every other nbs run uses one thread")
     ap.add_argument("--thread-algorithms", default="auto,cellsort")
+    ap.add_argument("--steps", type=float, default=1e-3,
+                    help="time-step rows (nbs-ALG-steps, uniform scenes): each element moves "
+                         "up to this many diameters per axis per step (0: none)")
+    ap.add_argument("--step-algorithms", default="auto")
     ap.add_argument("--threads-min-n", type=float, default=0)
     ap.add_argument("--fraction", type=float, default=0.5, help="uniform scenes")
     ap.add_argument("--sparse-fraction", type=float, default=0.005)
@@ -664,6 +710,7 @@ def main(argv):
     a.algorithms = [s for s in a.algorithms.split(",") if s]
     a.threads = [int(x) for x in a.threads.split(",") if x.strip() and int(x) != 1]
     a.thread_algorithms = [s for s in a.thread_algorithms.split(",") if s]
+    a.step_algorithms = [s for s in a.step_algorithms.split(",") if s]
     a.spacings = number_list(a.spacings, lambda x: int(x) if x == int(x) else x)
     a.sweep_n = int(a.sweep_n)
     for k in ("other_max_n", "peer_max_n", "peer_max_n_other", "nosort_max_n", "direct_max",
