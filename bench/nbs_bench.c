@@ -91,7 +91,9 @@ static void usage(FILE *out) {
       "  --min-time T       repeat at least until T seconds have been spent (default 0)\n"
       "  --fresh            every detection sorts from scratch (nbs_detect_def.fresh)\n"
       "  --move D           before each repeat after the first, move every element by up\n"
-      "                     to D diameters per axis (time steps; tool nbs-ALG-steps)\n"
+      "                     to D diameters per axis (time steps; tool nbs-ALG-steps);\n"
+      "                     exactly --repeats steps (--min-time is ignored), so that runs\n"
+      "                     with other thread counts end on the same coordinates\n"
       "Output, one line per algorithm:\n"
       "  tool=nbs-ALG[-Tt] status=ok seconds=.. ns_per_element=.. pairs=.. ran=ALG\n"
       "  peak_bytes=.. work_bytes=.. pair_bytes=.. rss_extra_bytes=.. hash=.. threads=..\n"
@@ -294,7 +296,7 @@ static int run_algorithm(nbs_algorithm alg, const scene *s, const options *o) {
   nbs_status st = nbs_context_create(&cdef, &ctx);
   double best = -1.0, spent = 0.0;
   int done = 0;
-  while (st == NBS_OK && (done < o->repeats || spent < o->min_time)) {
+  while (st == NBS_OK && (done < o->repeats || (!moving && spent < o->min_time))) {
     if (moving && done > 0) move_scene(moving, ncoords, o->move * s->diameter, &rng);
     double t0 = now_seconds();
     st = nbs_detect(ctx, &in, &ddef);

@@ -34,6 +34,20 @@
  *      compress that AVX2 lacks) serves processors without AVX-512, and a generic kernel in
  *      plain C any other; all three give the same bytes in the same order (3D, N = 1e6, on
  *      the benchmark machine: 28, 36 and 71 ns per element in all).
+ * Time steps. A simulation detects the same elements every step, and they move little in a
+ * step. The context keeps the cell order of the last detection (the sorted packed words,
+ * ctx->cs_order_n), and a detection of the same n starts from it (nbs__cs_warm): one pass
+ * reads the elements in that order, as the gather does, computes each one's key again and
+ * keeps in place the elements whose key did not change; the few that changed place are
+ * sorted again and merged back. That replaces steps 1-3 (sort and gather) by one pass like
+ * the gather. The result, sorted by the whole word, is the order of a sort from scratch,
+ * so nothing else differs. For the keys to stay put, the grid's origin is a point of a fixed
+ * lattice of spacing the edge below the lowest coordinate (nbs__cs_anchor), not the lowest
+ * coordinate itself. Measured (3D,
+ * N = 1e6, fraction 0.5, random order, one thread, min of 5 processes, ns per element):
+ * from scratch 32.0; unmoved 28.8; steps of up to 1e-4, 1e-3, 1e-2 diameters per axis
+ * 29.1, 29.8, 31.8 (450, 5,000, 50,000 elements sorted again). 2D: 16.1; 11.5; 13.2 at
+ * 1e-3. With two threads the pass is shared, the merge is not (3D at 1e-3: 18.9 -> 18.3).
  * Where the time goes (3D, N = 1e6, fraction 0.5, random order, one thread, AVX-512; about
  * 28 ns per element in all): input validation 0.8, keys 1.2, sort 3.5, gather 3, sweep 19
  * (the kernel about 13.5 of it, finding windows and rows 5.5).
@@ -887,6 +901,102 @@ static inline uint64_t nbs__cs_cellkey(const nbs__cs_keying *kg, const double *x
   return iz << kg->sz | iy << kg->sy | ix;
 }
 
+/* The number of kept words among the first p places of the merge of key[0, k) and S[0, m)
+ * (both sorted, all words distinct): the i with key[i - 1] < S[p - i] and
+ * S[p - i - 1] < key[i], found by bisection (the merge path). */
+static int32_t nbs__cs_split(const uint64_t *key, int32_t k, const uint64_t *S, int64_t m,
+                             int64_t p) {
+  int64_t lo = p - m > 0 ? p - m : 0, hi = p < k ? p : k;
+  while (lo < hi) {
+    const int64_t i = lo + (hi - lo) / 2;
+    if (key[i] < S[p - i - 1]) lo = i + 1;
+    else hi = i;
+  }
+  return (int32_t)lo;
+}
+
+/* Merges the m sorted words S taken out (their coordinates read from the input) into the k
+ * kept words at the start of key[] (with their coordinates), in place, from the end: place
+ * p takes the larger of the last kept and the last taken out, and never overwrites a kept
+ * word not yet read, since a kept word only moves up. With T threads thread t fills the
+ * places [n t / T, n (t + 1) / T), whose kept words and words of S the merge path gives;
+ * the kept words it reads below its first place lie in the places of threads before it,
+ * so it copies them to `side` (room for `cap` elements) before any thread writes. */
+static void nbs__cs_merge(const nbs__cs *c, const nbs__run *run, int32_t k, const uint64_t *S,
+                          int64_t m, uint64_t *side, int64_t cap, int threads) {
+  const int32_t n = c->n;
+  const int dim = c->dim;
+  const uint64_t emask = c->imask;
+  uint64_t *key = c->key;
+  double *xs = c->xs, *ys = c->ys, *zs = c->zs, *rs = c->rs;
+  const double *x = run->x, *r = run->r;
+  uint64_t *sk = side;
+  double *sx = (double *)(void *)(sk + cap), *sy = sx + cap, *sz = sy + cap;
+  double *sr = sz + (dim == 3 ? cap : 0);
+  int32_t I[NBS__THREADS_MAX + 1];
+  int64_t off[NBS__THREADS_MAX + 1];
+  for (int t = 0; t <= threads; t++) I[t] = nbs__cs_split(key, k, S, m, nbs__chunk(n, t, threads));
+  off[0] = 0;
+  for (int t = 0; t < threads; t++) {
+    const int32_t P0 = nbs__chunk(n, t, threads), below = P0 < I[t + 1] ? P0 : I[t + 1];
+    off[t + 1] = off[t] + (below > I[t] ? below - I[t] : 0);
+  }
+#if defined(_OPENMP)
+#pragma omp parallel num_threads(threads) if (threads > 1)
+#endif
+  {
+    int t = 0;
+#if defined(_OPENMP)
+    t = omp_get_thread_num();
+#endif
+    const int32_t P0 = nbs__chunk(n, t, threads), P1 = nbs__chunk(n, t + 1, threads);
+    const int32_t I0 = I[t], I1 = I[t + 1];
+    const int64_t J0 = P0 - I0, J1 = P1 - I1, o = off[t] - I0;
+    for (int32_t i = I0; i < P0 && i < I1; i++) {
+      sk[o + i] = key[i];
+      sx[o + i] = xs[i];
+      sy[o + i] = ys[i];
+      if (dim == 3) sz[o + i] = zs[i];
+      if (rs) sr[o + i] = rs[i];
+    }
+#if defined(_OPENMP)
+#pragma omp barrier
+#endif
+    int32_t i = I1 - 1;
+    int64_t j = J1 - 1;
+    /* once S's words are placed, the kept words left are in place when J0 is 0 */
+    for (int32_t p = P1 - 1; p >= P0 && (j >= J0 || J0 > 0); p--) {
+      const bool low = i < P0; /* copied to side */
+      const uint64_t kw = i >= I0 ? (low ? sk[o + i] : key[i]) : 0;
+      if (i >= I0 && (j < J0 || kw > S[j])) {
+        key[p] = kw;
+        xs[p] = low ? sx[o + i] : xs[i];
+        ys[p] = low ? sy[o + i] : ys[i];
+        if (dim == 3) zs[p] = low ? sz[o + i] : zs[i];
+        if (rs) rs[p] = low ? sr[o + i] : rs[i];
+        i--;
+      } else {
+        /* the elements taken out are few and anywhere: ask for the coordinates of the one
+         * eight insertions ahead */
+        if (j >= J0 + 8) {
+          const size_t ea = (size_t)(S[j - 8] & emask) * (size_t)dim;
+          __builtin_prefetch(x + ea);
+          __builtin_prefetch(x + ea + (dim - 1));
+          if (rs) __builtin_prefetch(r + (S[j - 8] & emask));
+        }
+        const uint64_t w = S[j--];
+        const int32_t e = (int32_t)(w & emask);
+        const double *xk = x + (size_t)e * (size_t)dim;
+        key[p] = w;
+        xs[p] = xk[0];
+        ys[p] = xk[1];
+        if (dim == 3) zs[p] = xk[2];
+        if (rs) rs[p] = r[e];
+      }
+    }
+  }
+}
+
 /* The warm start: at most this share (1 / it) of the elements may change place. */
 #define NBS__CS_WARM_SHARE 16
 
@@ -905,7 +1015,10 @@ static inline uint64_t nbs__cs_cellkey(const nbs__cs_keying *kg, const double *x
  * NBS__CS_WARM_SHARE elements changed place (the pass stops there: an input that is not a
  * later state of the same elements stops it within the first sixteenth); the caller sorts
  * from scratch. With several threads each takes a contiguous part, its own share of spare,
- * and the parts are closed up before the merge. spare holds 2 n / NBS__CS_WARM_SHARE words. */
+ * and the parts are closed up before the merge, which the threads share (nbs__cs_merge).
+ * spare holds 7 n / NBS__CS_WARM_SHARE words: the words taken out, the radix sort's
+ * scratch, and the merge's side copy of as many elements (word, coordinates, radius), 3.5 n
+ * bytes of the 4 n of the idx array, which packed words leave unused. */
 static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_keying *kg,
                          int eb, int bits, uint64_t *spare, uint32_t *hist, int threads,
                          int64_t *moved) {
@@ -932,8 +1045,9 @@ static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
     int32_t k = from;
     int64_t m = 0;
     for (int32_t p = from; p < to; p++) {
-      /* the gather's prefetch; key[pa] is still the last order's word */
-      const int32_t pa = p + NBS__CS_AHEAD < n ? p + NBS__CS_AHEAD : p;
+      /* the gather's prefetch; key[pa] is still the last order's word, within this thread's
+       * part (the next thread's rewrites its own) */
+      const int32_t pa = p + NBS__CS_AHEAD < to ? p + NBS__CS_AHEAD : p;
       const int32_t ahead = (int32_t)(key[pa] & emask);
       __builtin_prefetch(x + (size_t)ahead * (size_t)dim);
       __builtin_prefetch(x + (size_t)ahead * (size_t)dim + (dim - 1));
@@ -982,35 +1096,7 @@ static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
   }
   nbs__radix(spare, NULL, spare + limit, NULL, spare, NULL, (int32_t)m, 0,
              nbs__radix_digits(bits + eb), hist, 1);
-  /* merge from the end: place p takes the larger of the last kept and the last taken out */
-  int32_t i = k - 1, p = n - 1;
-  for (j = m - 1; j >= 0; p--) {
-    if (i >= 0 && key[i] > spare[j]) {
-      key[p] = key[i];
-      xs[p] = xs[i];
-      ys[p] = ys[i];
-      if (dim == 3) zs[p] = zs[i];
-      if (rs) rs[p] = rs[i];
-      i--;
-    } else {
-      /* the elements taken out are few and anywhere: ask for the coordinates of the one
-       * eight insertions ahead */
-      if (j >= 8) {
-        const size_t ea = (size_t)(spare[j - 8] & emask) * (size_t)dim;
-        __builtin_prefetch(x + ea);
-        __builtin_prefetch(x + ea + (dim - 1));
-        if (rs) __builtin_prefetch(r + (spare[j - 8] & emask));
-      }
-      const uint64_t w = spare[j--];
-      const int32_t e = (int32_t)(w & emask);
-      const double *xk = x + (size_t)e * (size_t)dim;
-      key[p] = w;
-      xs[p] = xk[0];
-      ys[p] = xk[1];
-      if (dim == 3) zs[p] = xk[2];
-      if (rs) rs[p] = r[e];
-    }
-  }
+  nbs__cs_merge(c, run, k, spare, m, spare + 2 * limit, limit, threads);
   *moved = m;
   return true;
 }
@@ -1077,28 +1163,30 @@ bool nbs__cellsort_fits(const nbs__grid *g) {
   return bits <= 64;
 }
 
-/* cellsort's grid: on each axis the origin of the last detection (ctx->cs_origin), or a
- * new one, a multiple of the cell edge one edge or two below the lowest coordinate, so
- * that the cells, and so the keys, stay where they are from step to step: the start from
- * the last order compares words, and with the origin at the lowest element a step of that
- * one element would move every cell and change every key. The last origin is kept while
- * the lowest coordinate lies less than 4 edges above it. The grid is kept only when its
- * cells need the same bits in all as input.c's, so that it never changes whether the key
- * fits or is packed; otherwise, and where the origin cannot be computed exactly enough
- * (|lo| huge next to the edge), the grid stays as input.c made it. input.c's rounding
- * argument holds for any origin at or below the lowest coordinate. */
-static void nbs__cs_anchor(nbs_context *ctx, nbs__grid *g) {
+/* cellsort's grid: on each axis the origin is moved down from the lowest coordinate lo to a
+ * point of the lattice (k + f) e below it, less one edge, e the cell edge and f = 0.381966
+ * (the golden section: far from 0, 1/2 and other simple fractions, where the lowest
+ * coordinate of a scene often lies, at a wall or a radius from it). The
+ * cells, and so the keys, then stay where they are from step to step: the start from the
+ * last order compares words, and with the origin at the lowest element a step of that one
+ * element would move every cell and change every key. The origin is a function of this
+ * detection's input alone (not of the context's history), so that a detection from the
+ * last order and one from scratch cut the same cells: elements on cell faces must fall on
+ * the same side in both (fuzz_detect found an origin kept from an earlier step to give
+ * another order). It moves, and every key with it, only when lo crosses a lattice point.
+ * The grid is kept only when its cells need the same bits in all as input.c's, so that it
+ * never changes whether the key fits or is packed; otherwise, and where the multiple
+ * cannot be computed exactly enough (|lo| huge next to e), the grid stays as input.c made
+ * it. input.c's rounding argument holds for any origin at or below the lowest coordinate. */
+static void nbs__cs_anchor(nbs__grid *g) {
   if (!g->fits || !(g->inv_edge > 0.0)) return;
   nbs__grid a = *g;
   const double e = g->edge;
   int before = 0, after = 0;
   for (int ax = 0; ax < g->dim; ax++) {
-    double lo = ctx->cs_origin[ax];
-    if (!(ctx->cs_edge == e && lo <= g->lo[ax] && g->lo[ax] - lo < 4.0 * e)) {
-      lo = (floor(g->lo[ax] * g->inv_edge) - 1.0) * e;
-      if (lo > g->lo[ax] - e) lo -= e;
-      if (!(lo <= g->lo[ax] && g->lo[ax] - lo < 4.0 * e)) return;
-    }
+    const double f = 0.381966;
+    const double lo = (floor(g->lo[ax] * g->inv_edge - f) - 1.0 + f) * e;
+    if (!(lo <= g->lo[ax] && g->lo[ax] - lo < 3.0 * e)) return;
     const double top = (g->hi[ax] - lo) * g->inv_edge;
     if (!(top < (double)NBS__AXIS_MAX)) return;
     a.lo[ax] = lo;
@@ -1106,10 +1194,7 @@ static void nbs__cs_anchor(nbs_context *ctx, nbs__grid *g) {
     before += nbs__bits((uint64_t)g->n[ax]);
     after += nbs__bits((uint64_t)a.n[ax]);
   }
-  if (after != before) return;
-  *g = a;
-  for (int ax = 0; ax < g->dim; ax++) ctx->cs_origin[ax] = a.lo[ax];
-  ctx->cs_edge = e;
+  if (after == before) *g = a;
 }
 
 /* The work block's layout: key[n + pad] | idx[n, padded to 8 bytes; used by unpacked keys
@@ -1155,7 +1240,7 @@ nbs_status nbs__cellsort(nbs__run *run) {
                      "cellsort: %lld x %lld x %lld cells need a %d-bit key; use 'auto'",
                      (long long)nx, (long long)ny, (long long)nz, bx + by + bz);
   }
-  nbs__cs_anchor(ctx, &anchored); /* the same bits: it still fits */
+  nbs__cs_anchor(&anchored); /* the same bits: it still fits */
   nx = g->n[0];
   ny = g->n[1];
   nz = dim == 3 ? g->n[2] : 1;

@@ -92,8 +92,6 @@ struct nbs_context {
    * detections sort from scratch without trying: 2, 4, ... 64 after 1, 2, ... 6 failures in
    * a row (cs_warm_fails), so that steps that keep failing stop paying for the try. */
   int cs_warm_wait, cs_warm_fails;
-  /* the origin of cellsort's grid in the last detection, and its cell edge (cellsort.c) */
-  double cs_origin[3], cs_edge;
 
   /* The pair buffer (buffer mode) and the batch used in callback mode. */
   nbs_pair *pairs;

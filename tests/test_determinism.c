@@ -350,10 +350,10 @@ static void det_move(scene *s, int64_t first, int64_t every, double amp, uint64_
   }
 }
 
-/* One step: ctx detects s (its pairs in order, through the buffer or a callback) and a
- * fresh context detects it from scratch (def.fresh); the bytes must be the same. Returns
- * the stepping context's statistics in *st. */
-static void det_step(nbs_context *ctx, const nbs_context_def *cdef, const scene *s,
+/* One step: ctx detects s (its pairs in order, through the buffer or a callback) and the
+ * context ref detects it from scratch (def.fresh: ref itself only ever does); the bytes
+ * must be the same. Returns the stepping context's statistics in *st. */
+static void det_step(nbs_context *ctx, nbs_context *ref_ctx, const scene *s,
                      nbs_algorithm algo, nbs_mode mode, bool callback, nbs_stats *st,
                      const char *what) {
   pair_list got, ref;
@@ -361,8 +361,7 @@ static void det_step(nbs_context *ctx, const nbs_context_def *cdef, const scene 
                            : detect_raw(ctx, s, algo, mode, &got);
   ASSERT_OK(sg);
   ASSERT_OK(nbs_last_stats(ctx, st));
-  nbs_context *fresh;
-  ASSERT_OK(nbs_context_create(cdef, &fresh));
+  nbs_context *fresh = ref_ctx;
   nbs_input in = scene_input(s);
   nbs_detect_def def = nbs_default_detect_def();
   def.algorithm = algo;
@@ -382,23 +381,25 @@ static void det_step(nbs_context *ctx, const nbs_context_def *cdef, const scene 
             what, got.count, ref.count, st->reused_order, (long long)st->moved);
   pair_list_free(&got);
   pair_list_free(&ref);
-  nbs_context_destroy(fresh);
 }
 
 /* Time steps: cellsort (and auto) start a detection from the last one's cell order
  * (nbs.h). Through steps that move the elements a little (and sometimes not at all), move
  * them far, replace them, change n, the dimension or the radii, or follow another
  * algorithm in the same context, every detection gives the bytes of a detection from
- * scratch, in order, in both modes, through the buffer and a callback, with 1 to 4
- * threads. The statistics must show the order reused with elements re-sorted on small
+ * scratch, in order, in both modes, through the buffer and a callback, with 1 to 3
+ * threads (on enough elements for cellsort to use them). The statistics must show the order reused with elements re-sorted on small
  * steps, and not reused on an input of other elements, so that both paths are taken. */
 static void test_time_steps(void) {
   const det_kind kinds[] = {DET_UNIFORM, DET_QUANTIZED, DET_RADII};
   for (int dim = 2; dim <= 3; dim++) {
     for (size_t kd = 0; kd < sizeof kinds / sizeof *kinds; kd++) {
       const det_kind kind = kinds[kd];
-      const double box = dim == 2 ? 140.0 : 26.0; /* about 0.5 fraction with 20000 */
-      for (int threads = 1; threads <= 4; threads++) {
+      for (int threads = 1; threads <= 3; threads++) {
+        /* cellsort takes a thread per 20000 elements: 70000 let 3 threads work (3: parts
+         * of unequal merges); the box keeps the fraction near 0.5 */
+        const int64_t n = threads == 1 ? 20000 : 70000;
+        const double box = (dim == 2 ? 140.0 : 26.0) * pow((double)n / 20000.0, 1.0 / dim);
         for (int variant = 0; variant < 3; variant++) {
           /* 0: contacts through the buffer, 1: candidates, 2: contacts through a callback */
           const nbs_mode mode = variant == 1 ? NBS_MODE_CANDIDATES : NBS_MODE_CONTACTS;
@@ -407,14 +408,24 @@ static void test_time_steps(void) {
           char what[160];
           nbs_context_def cdef = nbs_default_context_def();
           cdef.threads = threads;
-          nbs_context *ctx;
+          nbs_context *ctx, *ref;
           ASSERT_OK(nbs_context_create(&cdef, &ctx));
-          scene s = det_scene(kind, dim, 20000, box, 0.0, 30 + kd);
+          ASSERT_OK(nbs_context_create(&cdef, &ref));
+          /* the lowest coordinate 1.18, 0.8 above a point of the lattice (k + 0.381966) e of
+           * cellsort's origin, which moves when the lowest coordinate crosses one, and every
+           * key with it: six small steps (quantized: at most 6 x 0.125) do not reach one */
+          scene s = det_scene(kind, dim, n, box, 1.18, 30 + kd);
           uint64_t rng = 77;
           const double small = kind == DET_QUANTIZED ? -0.125 : 0.01;
           nbs_stats st;
           int64_t moved = 0;
-#define STEP(label)                                                                             do {                                                                                            snprintf(what, sizeof what, "%dD kind %d, %d threads, variant %d: %s", dim, (int)kind,                 threads, variant, label);                                                            det_step(ctx, &cdef, &s, algo, mode, cb, &st, what);                                          if (test_failures) break;                                                                   } while (0)
+#define STEP(label)                                                                           \
+  do {                                                                                        \
+    snprintf(what, sizeof what, "%dD kind %d, %d threads, variant %d: %s", dim, (int)kind,    \
+             threads, variant, label);                                                        \
+    det_step(ctx, ref, &s, algo, mode, cb, &st, what);                                        \
+    if (test_failures) break;                                                                 \
+  } while (0)
           do {
             STEP("first");
             CHECK_EQ(st.reused_order, 0);
@@ -435,7 +446,7 @@ static void test_time_steps(void) {
             CHECK_EQ(st.reused_order, 0);
             for (int k = 0; k < 4; k++) STEP("after a far step"); /* waits, then reuses */
             CHECK_EQ(st.reused_order, 1);
-            scene other = det_scene(kind, dim, 20000, box, 3.0, 90 + kd);
+            scene other = det_scene(kind, dim, n, box, 3.0, 90 + kd);
             scene keep = s;
             s = other;
             STEP("other elements");
@@ -465,15 +476,16 @@ static void test_time_steps(void) {
 #undef STEP
           scene_free(&s);
           nbs_context_destroy(ctx);
+          nbs_context_destroy(ref);
           if (test_failures) return;
         }
       }
     }
   }
   /* the dimension and the radii change, with the same n */
-  nbs_context *ctx;
+  nbs_context *ctx, *ref;
   ASSERT_OK(nbs_context_create(NULL, &ctx));
-  nbs_context_def cdef = nbs_default_context_def();
+  ASSERT_OK(nbs_context_create(NULL, &ref));
   scene s3 = det_scene(DET_UNIFORM, 3, 12000, 23.0, 0.0, 41);
   scene s2 = det_scene(DET_UNIFORM, 2, 12000, 110.0, 0.0, 42);
   scene sr = det_scene(DET_RADII, 3, 12000, 23.0, 0.0, 43);
@@ -482,12 +494,13 @@ static void test_time_steps(void) {
   for (size_t k = 0; k < sizeof seq / sizeof *seq && !test_failures; k++) {
     char what[64];
     snprintf(what, sizeof what, "dimension and radii, step %zu", k);
-    det_step(ctx, &cdef, seq[k], NBS_CELLSORT, NBS_MODE_CONTACTS, false, &st, what);
+    det_step(ctx, ref, seq[k], NBS_CELLSORT, NBS_MODE_CONTACTS, false, &st, what);
   }
   scene_free(&s3);
   scene_free(&s2);
   scene_free(&sr);
   nbs_context_destroy(ctx);
+  nbs_context_destroy(ref);
 }
 
 /* Kernels: cellsort's generic kernel (asked for with NBS_SIMD=generic, read when a context

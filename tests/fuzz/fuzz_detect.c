@@ -13,6 +13,11 @@
  *   - statistics agree with the pairs; list heads are empty after every detection (or the
  *     layout is forgotten after an error); a repeated detection gives the same bytes in the
  *     same order; the context's byte count matches its allocator's; nothing leaks;
+ *   - time steps: after cellsort's and auto's detections the elements move (by the bytes
+ *     after the scene, or a fixed pattern) and the same context detects them, starting from
+ *     its last cell order: the status and the pairs, in order, must be a fresh context's
+ *     from scratch (nbs_detect_def.fresh); the detections after it start from the moved
+ *     order and are checked against the contract as every other;
  *   - fault injection: one allocation (the k-th after the context's creation) may fail; the
  *     detection that meets it returns NBS_ERR_NOMEM, and every later one is correct.
  *
@@ -32,6 +37,7 @@
  *   origin u8 per axis (origins[], else 8 raw bytes); unit u8 (a step, see fz_unit)
  *   radii  u8 per element (radius ratios), when per-element
  *   coords u8 opcode (+ operands) per element and axis, see fz_coordinate
+ *   moves  u8 per element and axis for the time step, see fz_step (what is left)
  *
  * N is at most 64, so one input runs in well under a millisecond of library time.
  */
@@ -380,6 +386,7 @@ typedef struct fz_run {
   nbs_status want_invalid; /* NBS_OK, or the validation error every detection must give */
   int64_t want_element;
   fz_alloc *alloc;
+  fz_reader moves; /* the bytes after the scene */
 } fz_run;
 
 /* Bits needed for the values 0 .. count - 1 (cellsort's packed cell key). */
@@ -524,6 +531,51 @@ static nbs_status fz_detect(const fz_run *R, nbs_algorithm algo, nbs_mode mode, 
   return NBS_OK;
 }
 
+/* A time step (see the file comment): each coordinate moves by (b % 16 - 8) / 16 units for
+ * its byte b of R->moves when b < 128, else stays (past the end of the bytes, element k
+ * moves on axis a when (3k + a) % 5 == 0, by (k % 7 - 3) / 16 units). The same context
+ * detects the moved elements, and a fresh one, made alike, from scratch: the same status,
+ * and in contact mode through the buffer the same bytes in the same order. The context
+ * then holds the moved order; the caller's detections that follow start from it. */
+static void fz_step(fz_run *R, nbs_algorithm algo) {
+  const fz_scene *s = R->s;
+  static double x[FZ_MAX_N * 3];
+  fz_reader rd = R->moves;
+  for (int k = 0; k < s->n; k++) {
+    for (int a = 0; a < s->dim; a++) {
+      const int i = k * s->dim + a;
+      const unsigned b = rd.left ? fz_u8(&rd) : ((3 * k + a) % 5 == 0 ? (unsigned)(k % 7 + 5) : 128);
+      x[i] = s->x[i] + (b < 128 ? (double)((int)(b % 16) - 8) / 16.0 * s->unit : 0.0);
+    }
+  }
+  nbs_input in = R->in;
+  in.coords = x;
+  nbs_detect_def def = nbs_default_detect_def();
+  def.algorithm = algo;
+  R->alloc->failed = false;
+  nbs_status st = nbs_detect(R->ctx, &in, &def);
+  if (R->alloc->failed) return; /* fz_detect checks NBS_ERR_NOMEM; here only the result */
+  nbs_context_def cdef = nbs_default_context_def();
+  cdef.cell_budget = s->cell_budget;
+  cdef.max_pairs = s->max_pairs;
+  nbs_context *fresh;
+  if (nbs_context_create(&cdef, &fresh) != NBS_OK) FZ_FAIL(s, "nbs_context_create failed");
+  def.fresh = 1;
+  nbs_status fst = nbs_detect(fresh, &in, &def);
+  if (st != fst) {
+    FZ_FAIL(s, "%s after a step: status %s, from scratch %s", nbs_algorithm_name(algo),
+            nbs_status_name(st), nbs_status_name(fst));
+  } else if (st == NBS_OK) {
+    size_t c1, c2;
+    const nbs_pair *p1 = nbs_pairs(R->ctx, &c1), *p2 = nbs_pairs(fresh, &c2);
+    if (c1 != c2 || (c1 && memcmp(p1, p2, c1 * sizeof *p1) != 0)) {
+      FZ_FAIL(s, "%s after a step: %zu pairs, from scratch %zu, or another order",
+              nbs_algorithm_name(algo), c1, c2);
+    }
+  }
+  nbs_context_destroy(fresh);
+}
+
 static void fz_check(fz_run *R) {
   const fz_scene *s = R->s;
   static fz_pairs ref, got, again;
@@ -552,6 +604,7 @@ static void fz_check(fz_run *R) {
           !fz_equal(&got, &again)) {
         FZ_FAIL(s, "%s: a repeated detection differs", name);
       }
+      if (algo == NBS_CELLSORT || algo == NBS_AUTO) fz_step(R, algo);
       nbs_sort_pairs(got.p, got.count);
       if (!fz_well_formed(&got, s->n)) FZ_FAIL(s, "%s: contacts not well formed", name);
       if (!fz_equal(&got, &ref)) {
@@ -635,6 +688,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   fz_run R;
   memset(&R, 0, sizeof R);
   R.s = &s;
+  R.moves = rd;
   R.in.dim = s.dim;
   R.in.n = s.n;
   R.in.coords = s.x;
