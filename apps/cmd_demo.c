@@ -8,6 +8,10 @@
  * scene holding about --subsample elements, and every other algorithm runs on that window
  * too, so that all are compared with the reference on the same elements. Agreement means
  * the same sorted pair list: the same count and the same FNV-1a hash.
+ * Every run of the table is a detection from scratch. Below it, auto runs time steps on each
+ * whole scene: every element moves by up to 1e-3 diameters per axis before each detection,
+ * one context throughout, as in a simulation, where the library starts from the last step's
+ * cell order; the last step's pairs must be the bytes, in order, of a fresh detection.
  */
 #include "args.h"
 #include "cli.h"
@@ -28,6 +32,10 @@ static const char cli_demo_help[] =
     "pairs, time, ns per element, the library's bytes and agreement. Direct, whose time is\n"
     "quadratic, runs on a window of each scene (--subsample elements), where every other\n"
     "algorithm runs too. Screening runs where its cell array fits the cell budget.\n"
+    "Every run of the table sorts from scratch; below it, auto runs --repeat time steps on\n"
+    "each whole scene (every element moved by up to 0.001 diameters per axis before each\n"
+    "detection, one context, as in a simulation) and says whether the last step's pairs are\n"
+    "those of a detection from scratch.\n"
     "Writes a ParaView file (.vtp) of the 3D window with its contact network, and a PNG of\n"
     "a window of the 2D scene with its circles and contact lines, and prints where they are.\n"
     "\n"
@@ -234,6 +242,79 @@ static int cli_demo_scene(const cli_demo_opts *o, const char *label, const cli_e
   return CLI_OK;
 }
 
+/* Time steps (see the file comment): how far each element moves per axis and step, in
+ * diameters. */
+#define CLI_DEMO_STEP 1e-3
+
+typedef struct cli_demo_steps_result {
+  bool ran;
+  nbs_status status;
+  char algorithm[16];
+  double seconds;   /* the fastest step */
+  int64_t moved;    /* elements sorted again in the last step */
+  int reused;       /* the last step started from the step before's order */
+  bool same;        /* its pairs are the bytes of a detection from scratch */
+  double fresh_ns;  /* ns per element of auto from scratch, the table's row */
+} cli_demo_steps_result;
+
+static uint64_t cli_demo_next(uint64_t *state) {
+  uint64_t z = (*state += 0x9e3779b97f4a7c15ull);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  return z ^ (z >> 31);
+}
+
+static int cli_demo_steps(const cli_demo_opts *o, const cli_elements *e,
+                          cli_demo_steps_result *res) {
+  memset(res, 0, sizeof *res);
+  res->ran = true;
+  res->seconds = INFINITY;
+  const size_t count = (size_t)e->n * (size_t)e->dim;
+  double *x = malloc((count ? count : 1) * sizeof *x);
+  if (!x) return cli_fail(CLI_RESOURCE, "out of memory for the time steps");
+  if (count) memcpy(x, e->coords, count * sizeof *x);
+  nbs_context_def cdef = nbs_default_context_def();
+  cdef.cell_budget = o->budget;
+  cdef.threads = o->threads;
+  nbs_context *ctx = NULL, *fresh = NULL;
+  nbs_status s = nbs_context_create(&cdef, &ctx);
+  if (s == NBS_OK) s = nbs_context_create(&cdef, &fresh);
+  nbs_input in = {.dim = e->dim, .n = e->n, .coords = x, .radii = e->radii,
+                  .diameter = e->diameter};
+  nbs_detect_def def = nbs_default_detect_def();
+  uint64_t rng = (uint64_t)o->seed + 7;
+  const double step = CLI_DEMO_STEP * e->diameter;
+  if (s == NBS_OK) s = nbs_detect(ctx, &in, &def); /* the first step sorts from scratch */
+  for (int64_t r = 0; r < o->repeat && s == NBS_OK; r++) {
+    for (size_t k = 0; k < count; k++) {
+      x[k] += step * (2.0 * ((double)(cli_demo_next(&rng) >> 11) * 0x1p-53) - 1.0);
+    }
+    double t0 = cli_now();
+    s = nbs_detect(ctx, &in, &def);
+    double t = cli_now() - t0;
+    if (t < res->seconds) res->seconds = t;
+  }
+  if (s == NBS_OK) {
+    nbs_stats st;
+    nbs_last_stats(ctx, &st);
+    res->moved = st.moved;
+    res->reused = st.reused_order;
+    snprintf(res->algorithm, sizeof res->algorithm, "%s", nbs_algorithm_name(st.algorithm));
+    nbs_detect_def fdef = def;
+    fdef.fresh = 1;
+    s = nbs_detect(fresh, &in, &fdef);
+    size_t c1 = 0, c2 = 0;
+    const nbs_pair *p1 = nbs_pairs(ctx, &c1), *p2 = s == NBS_OK ? nbs_pairs(fresh, &c2) : NULL;
+    res->same = s == NBS_OK && c1 == c2 && (c1 == 0 || memcmp(p1, p2, c1 * sizeof *p1) == 0);
+  }
+  res->status = s;
+  nbs_context_destroy(ctx);
+  nbs_context_destroy(fresh);
+  free(x);
+  if (s == NBS_ERR_NOMEM) return cli_fail(CLI_RESOURCE, "time steps: out of memory");
+  return CLI_OK;
+}
+
 static int cli_demo_mkdir(const char *dir) {
   if (mkdir(dir, 0777) == 0 || errno == EEXIST) {
     struct stat st;
@@ -312,7 +393,7 @@ int cli_demo(int argc, char **argv) {
 
   int nalg = 0;
   while (nbs_algorithm_name((nbs_algorithm)nalg)) nalg++;
-  const int steps = 2 + 2 * (nalg - 1) + 2 * nalg + 2;
+  const int steps = 2 + 2 * (nalg - 1) + 2 * nalg + 2 + 2;
   int step = 0;
   cli_progress prog;
   cli_progress_begin(&prog, "demo", steps);
@@ -328,6 +409,8 @@ int cli_demo(int argc, char **argv) {
   size_t win3_count = 0, pic_count = 0;
   cli_elements pic;
   memset(&pic, 0, sizeof pic);
+  cli_demo_steps_result timesteps[2];
+  memset(timesteps, 0, sizeof timesteps);
   /* The paths are printed in full, so that they can be opened from anywhere. */
   char vtp_path[4096 + 16], png_path[4096 + 16], dir[4096];
   if (!realpath(o.out, dir)) snprintf(dir, sizeof dir, "%s", o.out);
@@ -353,9 +436,16 @@ int cli_demo(int argc, char **argv) {
     full[s] = (cli_elements){sc[s].dim, sc[s].n, sc[s].coords, sc[s].radii, sc[s].diameter};
     char label[32];
     snprintf(label, sizeof label, "%dD uniform", dim);
+    const int auto_row = nrows; /* auto runs first on a whole scene */
     code = cli_demo_scene(&o, label, &full[s], false, rows, &nrows, MAXROWS, &prog, &step, steps,
                           NULL, NULL);
     if (code != CLI_OK) break;
+    code = cli_demo_steps(&o, &full[s], &timesteps[s]);
+    if (code != CLI_OK) break;
+    if (rows[auto_row].status == NBS_OK && full[s].n > 0) {
+      timesteps[s].fresh_ns = rows[auto_row].seconds * 1e9 / (double)full[s].n;
+    }
+    cli_progress_update(&prog, ++step);
     double lo[3], w;
     cli_demo_window_of(&full[s], o.subsample, lo, &w);
     code = cli_demo_window(&full[s], lo, w, &win[s]);
@@ -398,6 +488,25 @@ int cli_demo(int argc, char **argv) {
     }
     printf("\n");
   }
+  for (int s = 0; s < 2 && code == CLI_OK; s++) {
+    const cli_demo_steps_result *t = &timesteps[s];
+    if (!t->ran) continue;
+    if (t->status != NBS_OK) {
+      printf("time steps, %dD: %s\n", s == 0 ? 3 : 2, nbs_status_name(t->status));
+      all_agree = false;
+      continue;
+    }
+    const double ns = full[s].n > 0 ? t->seconds * 1e9 / (double)full[s].n : 0.0;
+    printf("time steps, %dD: auto (%s), every element moved by up to %g diameters per axis "
+           "before each detection:\n  %.1f ns per element (fastest of %lld steps; %.1f from "
+           "scratch above), %lld elements sorted again in the last\n  step (%s); %s\n",
+           s == 0 ? 3 : 2, t->algorithm, CLI_DEMO_STEP, ns, (long long)o.repeat, t->fresh_ns,
+           (long long)t->moved, t->reused ? "from the step before's order" : "from scratch",
+           t->same ? "its pairs are those of a detection from scratch, byte for byte"
+                   : "FAILED: its pairs differ from a detection from scratch");
+    if (!t->same) all_agree = false;
+  }
+  if (code == CLI_OK && (timesteps[0].ran || timesteps[1].ran)) printf("\n");
   if (code == CLI_OK) {
     printf("%s\n", all_agree ? "agreement: on every scene, every algorithm found the same "
                                "sorted pair list (same count, same FNV-1a hash)"

@@ -1163,11 +1163,11 @@ bool nbs__cellsort_fits(const nbs__grid *g) {
   return bits <= 64;
 }
 
-/* cellsort's grid: on each axis the origin is moved down from the lowest coordinate lo to a
- * point of the lattice (k + f) e below it, less one edge, e the cell edge and f = 0.381966
- * (the golden section: far from 0, 1/2 and other simple fractions, where the lowest
- * coordinate of a scene often lies, at a wall or a radius from it). The
- * cells, and so the keys, then stay where they are from step to step: the start from the
+/* cellsort's grid: on each axis the origin is moved down from the lowest coordinate lo to
+ * the point of the lattice (k + f) e below it, less one edge (e the cell edge, f = 0.381966,
+ * the golden section: far from 0, 1/2 and other simple fractions, where the lowest
+ * coordinate of a scene often lies, at a wall or a radius from it). The cells, and so the
+ * keys, then stay where they are from step to step: the start from the
  * last order compares words, and with the origin at the lowest element a step of that one
  * element would move every cell and change every key. The origin is a function of this
  * detection's input alone (not of the context's history), so that a detection from the
@@ -1175,7 +1175,7 @@ bool nbs__cellsort_fits(const nbs__grid *g) {
  * the same side in both (fuzz_detect found an origin kept from an earlier step to give
  * another order). It moves, and every key with it, only when lo crosses a lattice point.
  * The grid is kept only when its cells need the same bits in all as input.c's, so that it
- * never changes whether the key fits or is packed; otherwise, and where the multiple
+ * never changes whether the key fits or is packed; otherwise, and where the lattice point
  * cannot be computed exactly enough (|lo| huge next to e), the grid stays as input.c made
  * it. input.c's rounding argument holds for any origin at or below the lowest coordinate. */
 static void nbs__cs_anchor(nbs__grid *g) {

@@ -33,6 +33,12 @@ function(demo_check name dir)
   if(NOT r_out MATCHES "agreement: on every scene, every algorithm found the same sorted pair list")
     fail("${name}: no agreement line:\n${r_out}")
   endif()
+  # Time steps: auto on each whole scene; its last step's pairs are a fresh detection's.
+  foreach(d 3D 2D)
+    if(NOT r_out MATCHES "time steps, ${d}: auto \\([a-z]+\\), [^\n]*\n  [0-9.]+ ns per element [^\n]*\n  step \\([^)]*\\); its pairs are those of a detection from scratch, byte for byte\n")
+      fail("${name}: no time-step lines for ${d}:\n${r_out}")
+    endif()
+  endforeach()
 
   # The .vtp: what the demo says it wrote, what its header says, what reads back.
   if(NOT r_out MATCHES "wrote ([^\n]*/demo3d\\.vtp): ([0-9]+) spheres [^\n]* and ([0-9]+) contacts")
