@@ -47,7 +47,11 @@
  * N = 1e6, fraction 0.5, random order, one thread, min of 5 processes, ns per element):
  * from scratch 32.0; unmoved 28.8; steps of up to 1e-4, 1e-3, 1e-2 diameters per axis
  * 29.1, 29.8, 31.8 (450, 5,000, 50,000 elements sorted again). 2D: 16.1; 11.5; 13.2 at
- * 1e-3. With two threads the pass is shared, the merge is not (3D at 1e-3: 18.9 -> 18.3).
+ * 1e-3. With two threads (both the pass and the merge shared), 3D at 1e-3: 21.4 -> 18.7.
+ * Like the gather, the pass waits on memory: it reads the input in the last order, at
+ * random (it and the cold gather took 7.7 and 6.2 ns per element of these on a day when
+ * this machine's memory was slow). Tried and left out: the pass in a function of its own
+ * with restrict pointers and the grid in locals (no faster, 29.3 vs 29.7 unmoved).
  * Where the time goes (3D, N = 1e6, fraction 0.5, random order, one thread, AVX-512; about
  * 28 ns per element in all): input validation 0.8, keys 1.2, sort 3.5, gather 3, sweep 19
  * (the kernel about 13.5 of it, finding windows and rows 5.5).
