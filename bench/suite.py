@@ -497,7 +497,8 @@ def summary(rows, n_head):
     return "\n".join(out) + "\n"
 
 
-STYLE = {"nbs-auto": ("C0", "o"), "nbs-auto-2t": ("C0", "1"), "nbs-auto-steps": ("C0", "+"), "nbs-cellsort": ("C9", "d"),
+STYLE = {"nbs-auto": ("C0", "o"), "nbs-auto-2t": ("C0", "1"), "nbs-auto-steps": ("navy", "+"),
+         "nbs-cellsort": ("C9", "d"),
          "nbs-nbs": ("C1", "s"), "nbs-sorting": ("C2", "^"), "nbs-screening": ("C3", "v"),
          "nbs-direct": ("C7", "x"), "nanoflann": ("C4", "D"), "cgal": ("C5", "P"),
          "scipy": ("C6", "*"), "lammps": ("k", "h"), "lammps-nosort": ("C8", "<")}
