@@ -137,6 +137,15 @@ static int nbs__bits(uint64_t count) {
   return b;
 }
 
+/* The calling thread's number in a parallel region (0 without OpenMP). */
+static inline int nbs__thread_num(void) {
+#if defined(_OPENMP)
+  return omp_get_thread_num();
+#else
+  return 0;
+#endif
+}
+
 /* Where thread t's share of n elements starts, when `threads` share them evenly. */
 static inline int32_t nbs__chunk(int32_t n, int t, int threads) {
   return (int32_t)((int64_t)n * t / threads);
@@ -180,10 +189,7 @@ static void nbs__radix(uint64_t *sk, int32_t *si, uint64_t *dk, int32_t *di, uin
 #pragma omp parallel num_threads(threads) if (threads > 1)
 #endif
     {
-      int t = 0;
-#if defined(_OPENMP)
-      t = omp_get_thread_num();
-#endif
+      const int t = nbs__thread_num();
       int32_t from = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
       uint32_t *h = hist + (size_t)t * buckets;
       memset(h, 0, buckets * sizeof *h);
@@ -206,10 +212,7 @@ static void nbs__radix(uint64_t *sk, int32_t *si, uint64_t *dk, int32_t *di, uin
 #pragma omp parallel num_threads(threads) if (threads > 1)
 #endif
     {
-      int t = 0;
-#if defined(_OPENMP)
-      t = omp_get_thread_num();
-#endif
+      const int t = nbs__thread_num();
       int32_t from = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
       uint32_t *h = hist + (size_t)t * buckets;
       if (si) {
@@ -949,10 +952,7 @@ static void nbs__cs_merge(const nbs__cs *c, const nbs__run *run, int32_t k, cons
 #pragma omp parallel num_threads(threads) if (threads > 1)
 #endif
   {
-    int t = 0;
-#if defined(_OPENMP)
-    t = omp_get_thread_num();
-#endif
+    const int t = nbs__thread_num();
     const int32_t P0 = nbs__chunk(n, t, threads), P1 = nbs__chunk(n, t + 1, threads);
     const int32_t I0 = I[t], I1 = I[t + 1];
     const int64_t J0 = P0 - I0, J1 = P1 - I1, o = off[t] - I0;
@@ -1040,10 +1040,7 @@ static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
 #pragma omp parallel num_threads(threads) if (threads > 1) reduction(|| : over)
 #endif
   {
-    int t = 0;
-#if defined(_OPENMP)
-    t = omp_get_thread_num();
-#endif
+    const int t = nbs__thread_num();
     const int32_t from = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
     uint64_t *mine = spare + (size_t)t * (size_t)share;
     int32_t k = from;
