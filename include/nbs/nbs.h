@@ -211,11 +211,11 @@ NBS_API nbs_detect_def nbs_default_detect_def(void);
  * when they have moved little since (a time step) it re-sorts only the few that changed
  * place instead of sorting all of them. The pairs and their order are exactly those of a
  * detection from scratch; only the time differs. Inputs that are not a later state of the
- * same elements are recognised early and sorted from scratch. def.fresh = 1 turns it off. Without a callback the pairs
- * replace the context's buffer (nbs_pairs); with one they are delivered in batches and the
- * buffer is left empty. After a first detection, a detection with the same or a smaller n
- * (and a domain of no more cells per axis) allocates nothing, unless it finds more pairs
- * than the buffer has held before.
+ * same elements are recognised early and sorted from scratch. def.fresh = 1 turns it off.
+ * Without a callback the pairs replace the context's buffer (nbs_pairs); with one they are
+ * delivered in batches and the buffer is left empty. After a first detection, a detection
+ * with the same or a smaller n (and a domain of no more cells per axis) allocates nothing,
+ * unless it finds more pairs than the buffer has held before.
  * Errors: NBS_ERR_NULL, NBS_ERR_DIM, NBS_ERR_COUNT, NBS_ERR_COORD, NBS_ERR_RADIUS,
  * NBS_ERR_ALGORITHM, NBS_ERR_MODE, NBS_ERR_BUDGET, NBS_ERR_EXTENT, NBS_ERR_NOMEM,
  * NBS_ERR_PAIRS, NBS_ERR_STOPPED. After an error the buffer holds no valid pairs and the
