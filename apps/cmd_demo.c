@@ -257,13 +257,6 @@ typedef struct cli_demo_steps_result {
   double fresh_ns;  /* ns per element of auto from scratch, the table's row */
 } cli_demo_steps_result;
 
-static uint64_t cli_demo_next(uint64_t *state) {
-  uint64_t z = (*state += 0x9e3779b97f4a7c15ull);
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  return z ^ (z >> 31);
-}
-
 static int cli_demo_steps(const cli_demo_opts *o, const cli_elements *e,
                           cli_demo_steps_result *res) {
   memset(res, 0, sizeof *res);
@@ -286,9 +279,7 @@ static int cli_demo_steps(const cli_demo_opts *o, const cli_elements *e,
   const double step = CLI_DEMO_STEP * e->diameter;
   if (s == NBS_OK) s = nbs_detect(ctx, &in, &def); /* the first step sorts from scratch */
   for (int64_t r = 0; r < o->repeat && s == NBS_OK; r++) {
-    for (size_t k = 0; k < count; k++) {
-      x[k] += step * (2.0 * ((double)(cli_demo_next(&rng) >> 11) * 0x1p-53) - 1.0);
-    }
+    scene_step(x, count, step, &rng);
     double t0 = cli_now();
     s = nbs_detect(ctx, &in, &def);
     double t = cli_now() - t0;

@@ -257,17 +257,6 @@ static unsigned long long pairs_hash(const nbs_pair *pairs, size_t count) {
   return h;
 }
 
-/* Moves every coordinate by up to `step` either way (a time step); splitmix64 draws. */
-static void move_scene(double *coords, size_t count, double step, uint64_t *state) {
-  for (size_t k = 0; k < count; k++) {
-    uint64_t z = (*state += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    z ^= z >> 31;
-    coords[k] += step * (2.0 * ((double)(z >> 11) * 0x1.0p-53) - 1.0);
-  }
-}
-
 /* Runs one algorithm; prints its line. Returns 0, or 1 if it failed for another reason
  * than not fitting the scene (budget, extent). */
 static int run_algorithm(nbs_algorithm alg, const scene *s, const options *o) {
@@ -297,7 +286,7 @@ static int run_algorithm(nbs_algorithm alg, const scene *s, const options *o) {
   double best = -1.0, spent = 0.0;
   int done = 0;
   while (st == NBS_OK && (done < o->repeats || (!moving && spent < o->min_time))) {
-    if (moving && done > 0) move_scene(moving, ncoords, o->move * s->diameter, &rng);
+    if (moving && done > 0) scene_step(moving, ncoords, o->move * s->diameter, &rng);
     double t0 = now_seconds();
     st = nbs_detect(ctx, &in, &ddef);
     double t = now_seconds() - t0;

@@ -254,6 +254,10 @@ int scene_generate(const scene_def *def, scene *out, char *err, size_t errlen) {
   return 0;
 }
 
+void scene_step(double *coords, size_t count, double step, uint64_t *state) {
+  for (size_t k = 0; k < count; k++) coords[k] += step * (2.0 * scene_uniform(state) - 1.0);
+}
+
 void scene_free(scene *s) {
   if (!s) return;
   free(s->coords);

@@ -57,6 +57,9 @@ const char *scene_kind_name(scene_kind kind);
  * definitions or allocation failure. */
 int scene_generate(const scene_def *def, scene *out, char *err, size_t errlen);
 void scene_free(scene *s);
+/* A time step: moves each of the `count` coordinates by an amount uniform in [-step, step),
+ * drawn from *state (splitmix64: the same sequence everywhere). */
+void scene_step(double *coords, size_t count, double step, uint64_t *state);
 
 #ifdef __cplusplus
 }

@@ -43,8 +43,8 @@
  * the gather. The result, sorted by the whole word, is the order of a sort from scratch,
  * so nothing else differs. For the keys to stay put, the grid's origin is a point of a fixed
  * lattice of spacing the edge below the lowest coordinate (nbs__cs_anchor), not the lowest
- * coordinate itself. Measured (3D,
- * N = 1e6, fraction 0.5, random order, one thread, min of 5 processes, ns per element):
+ * coordinate itself. Measured (3D, N = 1e6, fraction 0.5, random order, one thread, min of
+ * 5 processes, ns per element; nbs_bench --move D against --fresh):
  * from scratch 32.0; unmoved 28.8; steps of up to 1e-4, 1e-3, 1e-2 diameters per axis
  * 29.1, 29.8, 31.8 (450, 5,000, 50,000 elements sorted again). 2D: 16.1; 11.5; 13.2 at
  * 1e-3. With two threads (both the pass and the merge shared), 3D at 1e-3: 21.4 -> 18.7.
@@ -908,6 +908,16 @@ static inline uint64_t nbs__cs_cellkey(const nbs__cs_keying *kg, const double *x
   return iz << kg->sz | iy << kg->sy | ix;
 }
 
+/* Place p of the cell order takes element e's coordinates (and radius) from the input: the
+ * gather and the time-step merge (the time-step pass writes the same through locals). */
+static inline void nbs__cs_take(const nbs__cs *c, const nbs__run *run, int32_t p, int32_t e) {
+  const double *xk = run->x + (size_t)e * (size_t)c->dim;
+  c->xs[p] = xk[0];
+  c->ys[p] = xk[1];
+  if (c->dim == 3) c->zs[p] = xk[2];
+  if (c->rs) c->rs[p] = run->r[e];
+}
+
 /* The number of kept words among the first p places of the merge of key[0, k) and S[0, m)
  * (both sorted, all words distinct): the i with key[i - 1] < S[p - i] and
  * S[p - i - 1] < key[i], found by bisection (the merge path). */
@@ -989,13 +999,8 @@ static void nbs__cs_merge(const nbs__cs *c, const nbs__run *run, int32_t k, cons
           if (rs) __builtin_prefetch(r + (S[j - 8] & emask));
         }
         const uint64_t w = S[j--];
-        const int32_t e = (int32_t)(w & emask);
-        const double *xk = x + (size_t)e * (size_t)dim;
         key[p] = w;
-        xs[p] = xk[0];
-        ys[p] = xk[1];
-        if (dim == 3) zs[p] = xk[2];
-        if (rs) rs[p] = r[e];
+        nbs__cs_take(c, run, p, (int32_t)(w & emask));
       }
     }
   }
@@ -1010,8 +1015,8 @@ static void nbs__cs_merge(const nbs__cs *c, const nbs__run *run, int32_t k, cons
  * unchanged keeps its place: it moves down over the places of those taken out before it,
  * with its coordinates, and these words stay sorted, since they were. An element whose
  * word changed (it moved to another x sub-cell, row or layer) is taken out to `spare`.
- * When none changed, that is all: the sort and the gather are skipped (3D, N = 1e6: 33 ->
- * 30 ns per element in all, see the file comment). Otherwise the few taken out are sorted
+ * When none changed, that is all: the sort and the gather are skipped (the figures are in
+ * the file comment). Otherwise the few taken out are sorted
  * (the radix sort, in spare) and merged back from the end. Sorted by the whole word (key,
  * then element), the result is the order a sort from scratch gives, whose stable passes
  * leave equal keys in element order: the same pairs in the same order.
@@ -1058,6 +1063,8 @@ static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
       const double *xk = x + (size_t)e * (size_t)dim;
       const uint64_t w = nbs__cs_cellkey(kg, xk) << eb | (uint64_t)e;
       if (w == old) {
+        /* nbs__cs_take's writes, through the locals: through c, the pass took 1 ns per
+         * element more (3D and 2D, N = 1e6, steps of 1e-3) */
         key[k] = w;
         xs[k] = xk[0];
         ys[k] = xk[1];
@@ -1148,12 +1155,7 @@ static void nbs__cs_sort_gather(const nbs__cs *c, const nbs__run *run, const nbs
     __builtin_prefetch(x + (size_t)ahead * (size_t)dim);
     __builtin_prefetch(x + (size_t)ahead * (size_t)dim + (dim - 1));
     if (c->rs) __builtin_prefetch(run->r + ahead);
-    const int32_t e = packed ? (int32_t)(c->key[p] & emask) : c->idx[p];
-    const double *xk = x + (size_t)e * (size_t)dim;
-    c->xs[p] = xk[0];
-    c->ys[p] = xk[1];
-    if (dim == 3) c->zs[p] = xk[2];
-    if (c->rs) c->rs[p] = run->r[e];
+    nbs__cs_take(c, run, p, packed ? (int32_t)(c->key[p] & emask) : c->idx[p]);
   }
 }
 
@@ -1168,9 +1170,9 @@ bool nbs__cellsort_fits(const nbs__grid *g) {
  * the point of the lattice (k + f) e below it, less one edge (e the cell edge, f = 0.381966,
  * the golden section: far from 0, 1/2 and other simple fractions, where the lowest
  * coordinate of a scene often lies, at a wall or a radius from it). The cells, and so the
- * keys, then stay where they are from step to step: the start from the
- * last order compares words, and with the origin at the lowest element a step of that one
- * element would move every cell and change every key. The origin is a function of this
+ * keys, then stay where they are from step to step: the start from the last order compares
+ * words, and with the origin at the lowest element a step of that one element would move
+ * every cell and change every key. The origin is a function of this
  * detection's input alone (not of the context's history), so that a detection from the
  * last order and one from scratch cut the same cells: elements on cell faces must fall on
  * the same side in both (fuzz_detect found an origin kept from an earlier step to give
