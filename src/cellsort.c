@@ -790,7 +790,8 @@ nbs__cs_sweep_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
      * once per row, and there a sparse scene's rows hold one element or two, a coin toss
      * (2D huge domain, N = 1e6: 25.5 -> 24.5 ns per element); in 3D a sparse scene's rows
      * hold one element, an exit a branch predicts, and the loop was faster (huge: 32.7
-     * against 35.1). The rows after `to`, and the padding, are above the row. */
+     * against 35.1). The rows after `to`, and the padding (all ones), are above the row:
+     * a 2D key has at most 63 bits (two axes of at most 2^30 cells, 3 fine bits). */
     int32_t b = a + 1;
     if (dim == 2) {
       NBS__CS_ADVANCE(key, b, upto, row << kx | rowlow);
