@@ -387,7 +387,7 @@ static size_t nbs__cs_block_generic(const nbs__cs *c, int32_t c0, int lanes,
  * same time (33.2 / 33.2), and the compress stored to memory directly: slower (35.1
  * against 33.4). Where the kernel's time goes, measured by leaving parts out (3D, N = 1e6,
  * detection 34 ns): the steps over the ranges about 12 ns, of which the loops alone (one
- * load per q) about 5.5, the distances without the pairs' output about 6. */
+ * load per q) about 5.5, the distances on top of them under 1, the pairs' output about 6. */
 static inline __attribute__((always_inline)) NBS__CS_AVX512_TARGET size_t
 nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int32_t c0,
                       int lanes, const nbs__cs_ranges *rg, nbs_pair *out) {
@@ -418,8 +418,8 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int3
                        _mm512_maskz_loadu_epi64(im, ids + 2 * (size_t)c0)));
   const __m512i IMASK = _mm512_set1_epi32(imask);
   size_t m = 0;
-  /* one q against the block's lanes (lm: those of the block, for candidate mode) */
-#define NBS__CS_STEP512(q, lm)                                                                \
+  /* one q against the block's lanes */
+#define NBS__CS_STEP512(q)                                                                \
   do {                                                                                        \
     __m512d dx = _mm512_sub_pd(PX, _mm512_set1_pd(X[q]));                                     \
     __m512d dy = _mm512_sub_pd(PY, _mm512_set1_pd(Y[q]));                                     \
@@ -433,7 +433,7 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int3
       __m512d rr = _mm512_add_pd(PR, _mm512_set1_pd(R[q]));                                   \
       lim = _mm512_mul_pd(rr, rr);                                                            \
     }                                                                                         \
-    const __mmask8 hit = contacts ? _mm512_cmp_pd_mask(d, lim, _CMP_LE_OQ) : (lm);            \
+    const __mmask8 hit = contacts ? _mm512_cmp_pd_mask(d, lim, _CMP_LE_OQ) : im;              \
     const __m512i IQ = _mm512_and_si512(                                                      \
         _mm512_broadcastd_epi32(_mm_cvtsi32_si128(ids[(size_t)(q)*istep])), IMASK);           \
     const __m512i pr = _mm512_mask_max_epi32(_mm512_min_epi32(IP2, IQ), 0xAAAA, IP2, IQ);     \
@@ -445,7 +445,7 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int3
   const int last = rg->count - 1;
   for (int r = 0; r < rg->count; r++) {
     const int32_t q1 = r == last && rg->q1[r] > c0 ? c0 : rg->q1[r];
-    for (int32_t q = rg->q0[r]; q < q1; q++) NBS__CS_STEP512(q, im);
+    for (int32_t q = rg->q0[r]; q < q1; q++) NBS__CS_STEP512(q);
   }
 #undef NBS__CS_STEP512
   /* The block's own pairs, by rotation: lane l against lane (l + k) mod 8 for k = 1, 2, 3
