@@ -281,6 +281,7 @@ nbs_status nbs_context_create(const nbs_context_def *def, nbs_context **out) {
 void nbs_context_destroy(nbs_context *ctx) {
   if (!ctx) return;
   nbs__free(ctx, ctx->work, ctx->work_size);
+  nbs__free(ctx, ctx->nbs_block, ctx->nbs_block_size);
   nbs__free(ctx, ctx->pairs, ctx->pairs_cap * sizeof(nbs_pair));
   for (int t = 0; t < NBS__THREADS_MAX; t++) {
     nbs__free(ctx, ctx->tpairs[t], ctx->tcap[t] * sizeof(nbs_pair));

@@ -84,6 +84,11 @@ struct nbs_context {
   size_t work_size;
   int work_kind;
   int64_t work_cap[4];
+  /* NBS's layer block (3D): a copy of the elements of the central layer and of the layer
+   * below it, in their own allocation because its size is known only once a detection has
+   * counted the layers (munjiza_nbs.c). Nothing in it lives from one detection to the next. */
+  void *nbs_block;
+  size_t nbs_block_size;
   /* cellsort's cell order: when work_kind is NBS__WORK_CELLSORT and cs_order_n is n (> 0),
    * the work block's key array holds the packed words (key << eb | element) of the last
    * detection of n elements, sorted: the next detection may start from it (cellsort.c). */
@@ -190,24 +195,30 @@ static inline nbs_status nbs__emit(nbs__run *run, int32_t a, int32_t b) {
   return NBS_OK;
 }
 
-/* The contact test of the contract: |xa - xb|^2 <= (ra + rb)^2 in double. */
-static inline bool nbs__touch(const nbs__run *run, int32_t a, int32_t b) {
-  const double *pa = run->x + (size_t)a * (size_t)run->dim;
-  const double *pb = run->x + (size_t)b * (size_t)run->dim;
+/* The contact test of the contract on two points pa, pb of dim coordinates and the radii
+ * ra, rb (r: whether there are radii; else lim2 is the diameter squared):
+ * |xa - xb|^2 <= (ra + rb)^2 in double, always as this sequence of operations. */
+static inline bool nbs__touch_at(const double *pa, const double *pb, int dim, bool r, double ra,
+                                 double rb, double lim2) {
   double dx = pa[0] - pb[0], dy = pa[1] - pb[1];
   double s = dx * dx + dy * dy;
-  if (run->dim == 3) {
+  if (dim == 3) {
     double dz = pa[2] - pb[2];
     s += dz * dz;
   }
-  double lim;
-  if (run->r) {
-    double rr = run->r[a] + run->r[b];
-    lim = rr * rr;
-  } else {
-    lim = run->d2;
+  if (r) {
+    double rr = ra + rb;
+    lim2 = rr * rr;
   }
-  return s <= lim;
+  return s <= lim2;
+}
+
+/* The contact test of elements a and b (nbs__touch_at on the caller's coordinates). */
+static inline bool nbs__touch(const nbs__run *run, int32_t a, int32_t b) {
+  const bool r = run->r != NULL;
+  return nbs__touch_at(run->x + (size_t)a * (size_t)run->dim,
+                       run->x + (size_t)b * (size_t)run->dim, run->dim, r, r ? run->r[a] : 0,
+                       r ? run->r[b] : 0, run->d2);
 }
 
 /* A pair yielded by an algorithm's cell mask: counted as a candidate, tested in contact

@@ -12,17 +12,18 @@
  *        x-lists A[2][nx] + X[N]         one list per cell of the central row (set 0) and of
  *                                        the row below it (set 1)
  *   3D:  z-lists C[nz] + Z[N]            one list per layer
- *        y-lists B[2][ny] + Y[N]         rows of the central layer (set 0), of the layer
+ *        y-lists B[2][ny] + Y[M]         rows of the central layer (set 0), of the layer
  *                                        below it (set 1)
- *        x-lists A[2][nx] + X[N]         cells of the central row (set 0), of its neighbour
+ *        x-lists A[2][nx] + X[M]         cells of the central row (set 0), of its neighbour
  *                                        rows (set 1, eqs. 3.78-3.79)
  *
  * A list is found non-empty by looping over the elements of the list one level up, never by
  * looping over cells, and each list is removed by resetting only the heads the elements that
  * built it touched. Time is therefore proportional to N whatever the packing density and the
  * extent of the domain (eqs. 3.63-3.64), and memory is ny + 2nx + 2N integers in 2D
- * (eq. 3.65), 3N + nz + 2ny + 2nx in 3D (eq. 3.80), plus the records described below (2nx in
- * 2D, 2nx + 2ny in 3D).
+ * (eq. 3.65). In 3D it is nz + 2ny + 2nx + N integers and a layer block of M <= N entries
+ * of 36 bytes (below) where eq. 3.80 has 3N integers, plus, in both, the records described
+ * below (2nx in 2D, 2nx + 2ny in 3D) and in 3D nz layer counts.
  *
  * Deviations from the book's text, all of them representation only:
  *  - 0-based element indices, and the end of a list is NBS__EMPTY (-1);
@@ -41,39 +42,53 @@
  *    element, so the central rows come in the book's order without a second walk of the
  *    layer (the rows are still found by the loop over the elements of the layer, step 3's);
  *  - walks of independent lists go side by side (2D: the central row and the row below it;
- *    3D: steps 3 and 4, and steps 6 and the first row of step 7), and in 3D the five rows of
- *    a central row's steps 6-10 are first walked once side by side, prefetching the
- *    elements' coordinates. In random element order every step of a list is a cache miss;
+ *    3D: steps 3 and 4). In random element order every step of a list is a cache miss;
  *    walked side by side the misses overlap. Each list still receives its elements in the
- *    book's order, so the pairs come out in the same order as from the plain rendering.
+ *    book's order, so the pairs come out in the same order as from the plain rendering;
+ *  - 3D: the layer block. Steps 3 and 4 copy each element they meet (coordinates, radius,
+ *    number) into the next entry of a block that holds the central layer and the layer
+ *    below it, and the y- and x-lists link entries of the block instead of elements
+ *    (nbs__nbs_block, below, says why). The lists hold the same elements in the same order;
+ *    the pairs are stored under the elements' numbers. The block has as many entries M as
+ *    the largest layer and the one below it hold together: step 1 counts each layer's
+ *    elements (CN[nz]), and a pass over the elements takes the largest sum before step 2.
  *
  * Measured on the 2-core AMD EPYC of bench/README.md, N = 1e6, fraction 0.5, random order,
- * one thread, before and after these last two deviations, back to back (minimum of 15):
- * 3D 548 -> 297 ns per element (side by side: 548 -> 395, then step 11 side by side 433 ->
- * 326, then the records 382 -> 297), 2D 229 -> 115 ns. What did not help, tried and left out:
- * caching each element's cell coordinates next to its links (an array of {Y, X, ix, iy}
- * structs, or one of {Z, Y, X, iy}: 3D 10-30% slower, 2D up to 60% slower; the coordinates
- * must be read for the contact test anyway, and reading them during the list walks is what
- * brings them into the cache), and walking the next central layer ahead during steps 3-4 to
- * prefetch it (2%, within the noise).
+ * one thread, before and after the deviations that are about speed, back to back: 3D 548 ->
+ * 297 ns per element for the side-by-side walks and the records (side by side: 548 -> 395,
+ * then step 11 side by side 433 -> 326, then the records 382 -> 297), 2D 229 -> 115 ns; then
+ * the layer block, against the five rows of steps 6-10 walked side by side with prefetches
+ * it replaced: 3D 290 -> 200 ns (interleaved runs, minimum of 6; sorted order 115 -> 108).
+ * What did not help, tried and left out: caching each element's cell coordinates next to its
+ * links (an array of {Y, X, ix, iy} structs, or one of {Z, Y, X, iy}: 3D 10-30% slower, 2D
+ * up to 60% slower; the coordinates must be read for the contact test anyway); walking the
+ * next central layer ahead during steps 3-4 to prefetch it (2%, within the noise); and, with
+ * the block, walking the z-lists of the next one or three central layers together with this
+ * one's into blocks of their own (4 or 8 walks side by side): the walks take less time
+ * (84 -> 47 ns per element with 8, one run each), but the blocks then no longer fit the
+ * core's cache together and steps 5-10 lose what the walks gained (minimum of 6: 173, 175
+ * and 176 ns for 2, 4 and 8 walks).
  *
  * The work block (ctx->work, work_kind NBS__WORK_NBS) holds, as int32:
- *   [ C: nz+2 ] [ B0: ny+2 ] [ B1: ny+2 ] [ A0: nx+2 ] [ A1: nx+2 ]
- *   [ RB0: ny+1 ] [ RB1: ny+1 ] [ RA0: nx+1 ] [ RA1: nx+1 ] [ Z: N ] [ Y: N ] [ X: N ]
+ *   [ C: nz+2 ] [ B0: ny+2 ] [ B1: ny+2 ] [ A0: nx+2 ] [ A1: nx+2 ] [ CN: nz+2 ]
+ *   [ RB0: ny+1 ] [ RB1: ny+1 ] [ RA0: nx+1 ] [ RA1: nx+1 ] [ Z: N ]
  * in 3D, and in 2D
  *   [ B: ny+2 ] [ A0: nx+2 ] [ A1: nx+2 ] [ RA0: nx+1 ] [ RA1: nx+1 ] [ Y: N ] [ X: N ]
- * that is 4 (3N + nz + 4ny + 4nx + 14) bytes in 3D and 4 (2N + ny + 4nx + 8) in 2D: eqs. 3.80
- * and 3.65, the records, and the padding (a record has one spare entry, written and not
- * counted by a push that starts no list). nx, ny, nz, N here are the capacities
- * ctx->work_cap[0], [1], [2], [3]: exactly the grid and N of the first detection, grown later
- * only when a detection needs more (axes then get 1/8 slack, within the cell budget).
- * work_cap[2] is 0 for the 2D layout (a 3D grid always has nz >= 1), which is how the
- * dimension is encoded.
+ * that is 4 (N + 2nz + 4ny + 4nx + 16) bytes in 3D and 4 (2N + ny + 4nx + 8) in 2D: eqs. 3.80
+ * (without Y and X) and 3.65, the records, the counts and the padding (a record has one
+ * spare entry, written and not counted by a push that starts no list). nx, ny, nz, N here
+ * are the capacities ctx->work_cap[0], [1], [2], [3]: exactly the grid and N of the first
+ * detection, grown later only when a detection needs more (axes then get 1/8 slack, within
+ * the cell budget). work_cap[2] is 0 for the 2D layout (a 3D grid always has nz >= 1), which
+ * is how the dimension is encoded. The layer block is its own allocation (ctx->nbs_block),
+ * of exactly M entries the first time and grown with 1/8 slack when a later detection needs
+ * more; nothing in it outlives a detection.
  * All heads are contiguous at the start, and between detections every head is NBS__EMPTY
- * (the book's step 0, done once when the layout is created); the next arrays and the
- * records need no initialisation because an entry is always written before it is read. A detection
- * that stops early (pair buffer failure, callback stop) leaves heads dirty, so it resets
- * work_kind to NBS__WORK_NONE and the next detection initialises the layout again.
+ * and every count 0 (the book's step 0, done once when the layout is created); the next
+ * arrays, the records and the block need no initialisation because an entry is always
+ * written before it is read. A detection that stops early (pair buffer failure, callback
+ * stop) leaves heads dirty, so it resets work_kind to NBS__WORK_NONE and the next detection
+ * initialises the layout again.
  */
 #include "internal.h"
 
@@ -86,7 +101,8 @@ typedef struct nbs__nbs_layout {
   int32_t *B1;        /* y-list heads of the layer below the central one (3D only) */
   int32_t *A0;        /* x-list heads of the central row */
   int32_t *A1;        /* x-list heads of the neighbouring rows */
-  int32_t *Z, *Y, *X; /* next arrays (Z in 3D only) */
+  int32_t *CN;        /* number of elements of each z-list (3D only; see the layer block) */
+  int32_t *Z, *Y, *X; /* next arrays: Z in 3D only, Y and X in 2D only */
   /* The heads each set's lists were started at, in the order they were started: at most
    * ny (RB0, RB1; 3D only) and nx (RA0, RA1) entries. */
   int32_t *RB0, *RB1, *RA0, *RA1;
@@ -111,18 +127,25 @@ static int64_t nbs__nbs_record_count(int dim, const int64_t cap[4]) {
   return 2 * (cap[0] + 1) + (dim == 3 ? 2 * (cap[1] + 1) : 0);
 }
 
-/* Bytes of the arrays that follow the cells per axis, heads and records: what the cell
- * budget bounds. */
+/* Number of layer counts CN (3D: nz + 2, padded like C; none in 2D). */
+static int64_t nbs__nbs_count_count(int dim, const int64_t cap[4]) {
+  return dim == 3 ? cap[2] + 2 : 0;
+}
+
+/* Bytes of the arrays that follow the cells per axis, heads, layer counts and records: what
+ * the cell budget bounds. */
 static uint64_t nbs__nbs_axis_bytes(int dim, const int64_t cap[4]) {
-  return (uint64_t)(nbs__nbs_head_count(dim, cap) + nbs__nbs_record_count(dim, cap)) *
+  return (uint64_t)(nbs__nbs_head_count(dim, cap) + nbs__nbs_count_count(dim, cap) +
+                    nbs__nbs_record_count(dim, cap)) *
          sizeof(int32_t);
 }
 
-/* Bytes of the whole layout: heads, records of started heads and (dim) next arrays of N
- * int32 each (eqs. 3.65, 3.80, plus 2nx (2D) or 2nx + 2ny (3D) for the records). */
+/* Bytes of the whole layout: heads, layer counts, records of started heads and the next
+ * arrays of N int32 each, two in 2D (Y, X: eq. 3.65) and one in 3D (Z; Y and X are in the
+ * layer block). */
 static uint64_t nbs__nbs_layout_bytes(int dim, const int64_t cap[4]) {
-  uint64_t ints = (uint64_t)nbs__nbs_head_count(dim, cap) +
-                  (uint64_t)nbs__nbs_record_count(dim, cap) + (uint64_t)dim * (uint64_t)cap[3];
+  uint64_t ints = nbs__nbs_axis_bytes(dim, cap) / sizeof(int32_t) +
+                  (uint64_t)(dim == 3 ? 1 : 2) * (uint64_t)cap[3];
   return ints * sizeof(int32_t);
 }
 
@@ -147,6 +170,8 @@ static void nbs__nbs_layout_at(nbs__nbs_layout *L, void *work, int dim, const in
   w += cap[0] + 2;
   L->A1 = w;
   w += cap[0] + 2;
+  L->CN = dim == 3 ? w : NULL;
+  w += nbs__nbs_count_count(dim, cap);
   if (dim == 3) {
     L->RB0 = w;
     w += cap[1] + 1;
@@ -161,13 +186,13 @@ static void nbs__nbs_layout_at(nbs__nbs_layout *L, void *work, int dim, const in
   w += cap[0] + 1;
   if (dim == 3) {
     L->Z = w;
-    w += cap[3];
+    L->Y = L->X = NULL;
   } else {
     L->Z = NULL;
+    L->Y = w;
+    w += cap[3];
+    L->X = w;
   }
-  L->Y = w;
-  w += cap[3];
-  L->X = w;
 }
 
 /* The dimension of the NBS layout that ctx->work holds (see the file comment). */
@@ -176,9 +201,15 @@ static int nbs__nbs_layout_dim(const nbs_context *ctx) { return ctx->work_cap[2]
 bool nbs__nbs_heads_empty(const nbs_context *ctx) {
   if (ctx->work_kind != NBS__WORK_NBS) return true;
   const int32_t *h = ctx->work;
-  int64_t count = nbs__nbs_head_count(nbs__nbs_layout_dim(ctx), ctx->work_cap);
+  const int dim = nbs__nbs_layout_dim(ctx);
+  const int64_t count = nbs__nbs_head_count(dim, ctx->work_cap);
   for (int64_t i = 0; i < count; i++) {
     if (h[i] != NBS__EMPTY) return false;
+  }
+  /* the layer counts follow the heads, and are all 0 between detections */
+  const int64_t counts = nbs__nbs_count_count(dim, ctx->work_cap);
+  for (int64_t i = count; i < count + counts; i++) {
+    if (h[i] != 0) return false;
   }
   return true;
 }
@@ -192,30 +223,6 @@ static inline int32_t nbs__nbs_cell(const nbs__grid *g, const double *x, int dim
   return 1 + nbs__cell(g, x + (size_t)k * (size_t)dim, axis);
 }
 
-/* A hint to fetch the cache line at p; nothing on compilers without the builtin. */
-#if defined(__GNUC__) || defined(__clang__)
-#define NBS__NBS_PREFETCH(p) __builtin_prefetch(p)
-#else
-#define NBS__NBS_PREFETCH(p) ((void)(p))
-#endif
-
-/* Walks the y-lists starting at r[0..4] side by side, touching each element's link and
- * prefetching its coordinates, so that the cache misses of the five walks overlap. */
-static inline void nbs__nbs_touch_rows(const int32_t *Y, const double *x, int dim,
-                                       const int32_t r[5]) {
-  int32_t e[5] = {r[0], r[1], r[2], r[3], r[4]};
-  for (;;) {
-    int live = 0;
-    for (int l = 0; l < 5; l++) {
-      if (e[l] == NBS__EMPTY) continue;
-      NBS__NBS_PREFETCH(x + (size_t)e[l] * (size_t)dim);
-      e[l] = Y[e[l]];
-      live = 1;
-    }
-    if (!live) break;
-  }
-}
-
 /* Heads are dirty when a detection stops in the middle: forget the layout, so that the next
  * detection sets every head to empty again (step 0). */
 static nbs_status nbs__nbs_abort(nbs__run *run, nbs_status s) {
@@ -223,9 +230,40 @@ static nbs_status nbs__nbs_abort(nbs__run *run, nbs_status s) {
   return s;
 }
 
-/* Checks the central cell, whose x-list (set 0, linked by X) starts at element c, with the
- * contact mask (2D: the mask of section 3.8, cells (ix-1,iy-1) (ix,iy-1) (ix+1,iy-1)
- * (ix-1,iy); 3D: the 13 cells of eq. 3.73):
+/* NBS's layer block (3D). When a layer becomes central, steps 3 and 4 walk its z-list and
+ * that of the layer below it; every element they meet is copied, in the order met, into the
+ * block: its coordinates (and radius), its number, and room for its y- and x-list links.
+ * Steps 5-11 then build and walk the y- and x-lists over block entries instead of element
+ * numbers, and the pairs are stored under the elements' numbers (id). Each list receives
+ * the same elements in the same order as in the book's text, so the pairs come out in the
+ * same order: this is representation only.
+ *
+ * Why: in random element order the elements of a layer are scattered over all N, and steps
+ * 5-10 visit each of them many times: five rows put it on x-lists (its own and, as a
+ * neighbour, four others), and the cell checks read it for every cell of whose mask its cell
+ * is part. Scattered, every visit can miss the cache, on its coordinates and on its links
+ * (before the block, a fifth of the time went to walking the five rows ahead with
+ * prefetches, only to overlap those misses); copied, the two layers sit in M * 36 bytes
+ * (about 720 kB at N = 1e6, fraction 0.5), in the core's own cache. Only steps 3 and 4 still
+ * walk scattered elements.
+ *
+ * Its capacity is the largest number of elements in a layer and the one below it, counted
+ * by step 1 (CN[iz], one int per layer) and taken before step 2. */
+typedef struct nbs__nbs_block {
+  double *x;        /* 3 coordinates per entry */
+  double *r;        /* a radius per entry, or NULL */
+  int32_t *id;      /* the element's number */
+  int32_t *Y, *X;   /* the entry's links in the y- and x-lists */
+} nbs__nbs_block;
+
+/* Bytes of one entry of the layer block. */
+static size_t nbs__nbs_entry_bytes(bool radii) {
+  return 3 * sizeof(double) + (radii ? sizeof(double) : 0) + 3 * sizeof(int32_t);
+}
+
+/* Checks the central cell, whose x-list (set 0, linked by X) starts at c, with the contact
+ * mask (2D: the mask of section 3.8, cells (ix-1,iy-1) (ix,iy-1) (ix+1,iy-1) (ix-1,iy); 3D:
+ * the 13 cells of eq. 3.73):
  *   - the cell itself: every element against those after it in the list (each pair once);
  *   - the cell (ix-1) of the central row, nb[0]: A0[ix-1], unmarked by the caller;
  *   - the cells ix-1, ix, ix+1 of the neighbouring rows, nb[1..3]: A1[ix-1], A1[ix],
@@ -233,16 +271,31 @@ static nbs_status nbs__nbs_abort(nbs__run *run, nbs_status s) {
  *     (iy,iz-1), (iy+1,iz-1), so these three lists cover the 3 cells of row iy-1 in layer
  *     iz and the 9 cells of layer iz-1.
  * Together 4 (2D) or 13 (3D) neighbour cells: each pair of neighbouring cells is visited
- * from exactly one of the two. */
-static inline nbs_status nbs__nbs_check_cell(nbs__run *run, const int32_t *X, int32_t c,
-                                             const int32_t nb[4]) {
+ * from exactly one of the two. In 2D the lists link element numbers (K is NULL); in 3D they
+ * link entries of the layer block K, which holds the coordinates the test reads. */
+static inline nbs_status nbs__nbs_pair(nbs__run *run, const nbs__nbs_block *K, int32_t a,
+                                       int32_t b) {
+  if (!K) return nbs__offer(run, a, b);
+  run->candidates++;
+  if (run->mode == NBS_MODE_CONTACTS) {
+    const bool r = K->r != NULL;
+    if (!nbs__touch_at(K->x + (size_t)a * 3, K->x + (size_t)b * 3, 3, r, r ? K->r[a] : 0,
+                       r ? K->r[b] : 0, run->d2)) {
+      return NBS_OK;
+    }
+  }
+  return nbs__emit(run, K->id[a], K->id[b]);
+}
+
+static inline nbs_status nbs__nbs_check_cell(nbs__run *run, const nbs__nbs_block *K,
+                                             const int32_t *X, int32_t c, const int32_t nb[4]) {
   for (int32_t a = c; a != NBS__EMPTY; a = X[a]) {
-    for (int32_t b = X[a]; b != NBS__EMPTY; b = X[b]) NBS__TRY(nbs__offer(run, a, b));
+    for (int32_t b = X[a]; b != NBS__EMPTY; b = X[b]) NBS__TRY(nbs__nbs_pair(run, K, a, b));
   }
   for (int l = 0; l < 4; l++) {
     if (nb[l] == NBS__EMPTY) continue;
     for (int32_t a = c; a != NBS__EMPTY; a = X[a]) {
-      for (int32_t b = nb[l]; b != NBS__EMPTY; b = X[b]) NBS__TRY(nbs__offer(run, a, b));
+      for (int32_t b = nb[l]; b != NBS__EMPTY; b = X[b]) NBS__TRY(nbs__nbs_pair(run, K, a, b));
     }
   }
   return NBS_OK;
@@ -340,7 +393,7 @@ static nbs_status nbs__nbs_2d(nbs__run *run, const nbs__nbs_layout *L) {
       const int32_t c = A0[ix];
       A0[ix] = nbs__mark(c);
       const int32_t nb[4] = {nbs__unmark(A0[ix - 1]), A1[ix - 1], A1[ix], A1[ix + 1]};
-      NBS__NBS_TRY(nbs__nbs_check_cell(run, X, c, nb));
+      NBS__NBS_TRY(nbs__nbs_check_cell(run, NULL, X, c, nb));
     }
 
     /* Removal of the x-lists: reset the heads the two rows started. */
@@ -355,42 +408,170 @@ static nbs_status nbs__nbs_2d(nbs__run *run, const nbs__nbs_layout *L) {
 
 /* ---- 3D (section 3.10; the numbered steps are those of the pseudocode on p. 127) ----- */
 
-/* Pushes element e onto the y-list of its row in the set B (record R, top). */
-#define NBS__NBS_PUSH_Y(e, B, R, top)                                                         \
+/* Makes the layer block hold `need` entries (need >= 1), with radii or not, and points *K
+ * into it. What it held is not kept: nothing in it is live between layers. The first block
+ * has exactly the size needed; a later, larger need gets 1/8 slack, so that a scene whose
+ * layers fill up step after step does not allocate every time. */
+static nbs_status nbs__nbs_block_reserve(nbs__run *run, int32_t need, nbs__nbs_block *K) {
+  nbs_context *ctx = run->ctx;
+  const bool radii = run->r != NULL;
+  const size_t entry = nbs__nbs_entry_bytes(radii);
+  if ((uint64_t)need > SIZE_MAX / 2 / entry) {
+    return nbs__fail(ctx, NBS_ERR_NOMEM, -1,
+                     "nbs: a layer block of %ld entries cannot be addressed", (long)need);
+  }
+  size_t bytes = (size_t)need * entry;
+  if (bytes > ctx->nbs_block_size) {
+    size_t want = bytes;
+    if (ctx->nbs_block) {
+      int64_t cap = (int64_t)need + need / 8;
+      if (cap > run->n) cap = run->n;
+      want = (size_t)cap * entry;
+    }
+    void *p = nbs__alloc(ctx, want);
+    if (!p) {
+      return nbs__fail(ctx, NBS_ERR_NOMEM, -1,
+                       "nbs: cannot allocate %zu bytes for the layer block", want);
+    }
+    nbs__free(ctx, ctx->nbs_block, ctx->nbs_block_size);
+    ctx->nbs_block = p;
+    ctx->nbs_block_size = want;
+  }
+  /* doubles first, then the int32 arrays: every array is aligned */
+  char *w = ctx->nbs_block;
+  K->x = (double *)(void *)w;
+  w += (size_t)need * 3 * sizeof(double);
+  K->r = NULL;
+  if (radii) {
+    K->r = (double *)(void *)w;
+    w += (size_t)need * sizeof(double);
+  }
+  K->id = (int32_t *)(void *)w;
+  K->Y = K->id + need;
+  K->X = K->Y + need;
+  return NBS_OK;
+}
+
+/* Copies element e into the next entry of the block (m) and pushes that entry onto the y-list
+ * of its row in the set B (record R, top): steps 3 and 4 for one element. */
+#define NBS__NBS_TAKE(e, B, R, top)                                                           \
   do {                                                                                        \
-    const int32_t nbs__iy = nbs__nbs_cell(g, x, 3, (e), 1);                                   \
-    NBS__NBS_PUSH((e), Y[e], B, nbs__iy, R, top);                                             \
+    const int32_t nbs__l = m++;                                                               \
+    const double *nbs__p = x + (size_t)(e) * 3;                                               \
+    double *nbs__q = K.x + (size_t)nbs__l * 3;                                                \
+    nbs__q[0] = nbs__p[0];                                                                    \
+    nbs__q[1] = nbs__p[1];                                                                    \
+    nbs__q[2] = nbs__p[2];                                                                    \
+    if (r) K.r[nbs__l] = r[e];                                                                \
+    K.id[nbs__l] = (e);                                                                       \
+    const int32_t nbs__iy = 1 + nbs__cell(g, nbs__q, 1);                                      \
+    NBS__NBS_PUSH(nbs__l, KY[nbs__l], B, nbs__iy, R, top);                                    \
   } while (0)
 
-static nbs_status nbs__nbs_3d(nbs__run *run, const nbs__nbs_layout *L) {
+/* Pushes block entry e onto the x-list of its cell in the set A (record R, top). */
+#define NBS__NBS_PUSH_XB(e, A, R, top)                                                        \
+  do {                                                                                        \
+    const int32_t nbs__ix = 1 + nbs__cell(g, K->x + (size_t)(e) * 3, 0);                      \
+    NBS__NBS_PUSH((e), X[e], A, nbs__ix, R, top);                                             \
+  } while (0)
+
+/* Steps 5-11 for the central layer, whose elements and those of the layer below it are in
+ * the block K, on the y-lists of sets 0 and 1 (started at the heads RB0[0..nb0-1],
+ * RB1[0..nb1-1]). */
+static nbs_status nbs__nbs_3d_layer(nbs__run *run, const nbs__nbs_layout *L,
+                                    const nbs__nbs_block *K, int32_t nb0, int32_t nb1) {
   const nbs__grid *g = &run->grid;
-  const double *x = run->x;
-  const int32_t n = run->n;
-  int32_t *restrict C = L->C;
   int32_t *restrict B0 = L->B0;
   int32_t *restrict B1 = L->B1;
   int32_t *restrict A0 = L->A0;
   int32_t *restrict A1 = L->A1;
-  int32_t *restrict Z = L->Z;
-  int32_t *restrict Y = L->Y;
-  int32_t *restrict X = L->X;
-  int32_t *restrict RB0 = L->RB0;
-  int32_t *restrict RB1 = L->RB1;
+  const int32_t *restrict RB0 = L->RB0;
+  const int32_t *restrict RB1 = L->RB1;
   int32_t *restrict RA0 = L->RA0;
   int32_t *restrict RA1 = L->RA1;
+  const int32_t *restrict Y = K->Y;
+  int32_t *restrict X = K->X;
+
+  /* Step 5: loop over the central layer; the first element in a "new" row (iy,iz) makes it
+   * the central row. Those first elements, in the order of the layer, are the ones step 3
+   * met first in their rows: RB0 lists their rows in that order, so the loop runs over RB0
+   * instead of walking the layer a second time. */
+  for (int32_t i = 0; i < nb0; i++) {
+    const int32_t iy = RB0[i];
+    const int32_t row = B0[iy];
+    B0[iy] = nbs__mark(row); /* mark the row "old" */
+    /* The neighbouring rows of eq. 3.79: (iy-1,iz) may have been central already (read
+     * unmarked); rows of layer iz-1 are set 1 and never marked. */
+    const int32_t nrow[4] = {nbs__unmark(B0[iy - 1]), B1[iy - 1], B1[iy], B1[iy + 1]};
+
+    /* Step 6: the elements of the central row onto the x-lists of set 0; step 7: the
+     * elements of the neighbouring rows onto the x-lists of set 1. */
+    int32_t na0 = 0, na1 = 0;
+    for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) NBS__NBS_PUSH_XB(e, A0, RA0, na0);
+    for (int l = 0; l < 4; l++) {
+      for (int32_t e = nrow[l]; e != NBS__EMPTY; e = Y[e]) NBS__NBS_PUSH_XB(e, A1, RA1, na1);
+    }
+
+    /* Step 8: loop over the central row; the first element in a "new" cell (ix,iy,iz)
+     * makes it the central cell: mark it and check it with the 13-cell mask (eq. 3.73). */
+    for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) {
+      const int32_t ix = 1 + nbs__cell(g, K->x + (size_t)e * 3, 0);
+      if (nbs__is_marked(A0[ix])) continue;
+      const int32_t c = A0[ix];
+      A0[ix] = nbs__mark(c);
+      const int32_t nb[4] = {nbs__unmark(A0[ix - 1]), A1[ix - 1], A1[ix], A1[ix + 1]};
+      NBS__TRY(nbs__nbs_check_cell(run, K, X, c, nb));
+    }
+
+    /* Steps 9 and 10: remove the x-lists of the central and of the neighbouring rows,
+     * resetting the heads they started. */
+    nbs__nbs_clear(A0, RA0, na0);
+    nbs__nbs_clear(A1, RA1, na1);
+  }
+
+  /* Step 11: remove the y-lists of the central layer and of layer iz-1. */
+  nbs__nbs_clear(B0, RB0, nb0);
+  nbs__nbs_clear(B1, RB1, nb1);
+  return NBS_OK;
+}
+
+static nbs_status nbs__nbs_3d(nbs__run *run, const nbs__nbs_layout *L) {
+  const nbs__grid *g = &run->grid;
+  const double *x = run->x;
+  const double *r = run->r;
+  const int32_t n = run->n;
+  int32_t *restrict C = L->C;
+  int32_t *restrict CN = L->CN;
+  int32_t *restrict B0 = L->B0;
+  int32_t *restrict B1 = L->B1;
+  int32_t *restrict Z = L->Z;
+  int32_t *restrict RB0 = L->RB0;
+  int32_t *restrict RB1 = L->RB1;
 
   /* Step 1: map every element onto its z-list (layer): Z[k] = C[iz]; C[iz] = k. All
-   * z-lists are "new" (unmarked). */
+   * z-lists are "new" (unmarked). CN[iz] counts the layer's elements. */
   for (int32_t k = 0; k < n; k++) {
-    int32_t iz = nbs__nbs_cell(g, x, 3, k, 2);
+    const int32_t iz = nbs__nbs_cell(g, x, 3, k, 2);
     Z[k] = C[iz];
     C[iz] = k;
+    CN[iz]++;
   }
+
+  /* The layer block: as many entries as the largest layer and the one below it hold. */
+  int32_t need = 1;
+  for (int32_t k = 0; k < n; k++) {
+    const int32_t iz = nbs__nbs_cell(g, x, 3, k, 2);
+    const int32_t t = CN[iz] + CN[iz - 1];
+    need = t > need ? t : need;
+  }
+  nbs__nbs_block K = {0};
+  NBS__NBS_TRY(nbs__nbs_block_reserve(run, need, &K));
+  int32_t *restrict KY = K.Y;
 
   /* Step 2: loop over the elements; the first one in a "new" z-list makes it the central
    * layer. */
   for (int32_t k = 0; k < n; k++) {
-    int32_t iz = nbs__nbs_cell(g, x, 3, k, 2);
+    const int32_t iz = nbs__nbs_cell(g, x, 3, k, 2);
     if (nbs__is_marked(C[iz])) continue;
     const int32_t layer = C[iz];
     C[iz] = nbs__mark(layer); /* mark the layer "old" */
@@ -398,78 +579,40 @@ static nbs_status nbs__nbs_3d(nbs__run *run, const nbs__nbs_layout *L) {
     const int32_t under = nbs__unmark(C[iz - 1]);
 
     /* Step 3: the elements of the central layer onto the y-lists of set 0; step 4: the
-     * elements of the neighbouring layer iz-1 onto the y-lists of set 1. The two walks go
-     * side by side, so that their cache misses overlap; each list still gets its elements
-     * in the book's order. RB0 records the rows of the central layer in the order in which
-     * this walk meets their first element. */
-    int32_t nb0 = 0, nb1 = 0;
+     * elements of the neighbouring layer iz-1 onto the y-lists of set 1; each copied into
+     * the block on the way, the y-lists linking its entries. The two walks go side by side,
+     * so that their cache misses overlap; each list still gets its elements in the book's
+     * order. RB0 records the rows of the central layer in the order in which this walk
+     * meets their first element. */
+    int32_t m = 0, nb0 = 0, nb1 = 0;
     int32_t e0 = layer, e1 = under;
     while (e0 != NBS__EMPTY && e1 != NBS__EMPTY) {
       const int32_t n0 = Z[e0], n1 = Z[e1];
-      NBS__NBS_PUSH_Y(e0, B0, RB0, nb0);
-      NBS__NBS_PUSH_Y(e1, B1, RB1, nb1);
+      NBS__NBS_TAKE(e0, B0, RB0, nb0);
+      NBS__NBS_TAKE(e1, B1, RB1, nb1);
       e0 = n0;
       e1 = n1;
     }
-    for (; e0 != NBS__EMPTY; e0 = Z[e0]) NBS__NBS_PUSH_Y(e0, B0, RB0, nb0);
-    for (; e1 != NBS__EMPTY; e1 = Z[e1]) NBS__NBS_PUSH_Y(e1, B1, RB1, nb1);
+    for (; e0 != NBS__EMPTY; e0 = Z[e0]) NBS__NBS_TAKE(e0, B0, RB0, nb0);
+    for (; e1 != NBS__EMPTY; e1 = Z[e1]) NBS__NBS_TAKE(e1, B1, RB1, nb1);
 
-    /* Step 5: loop over the central layer; the first element in a "new" row (iy,iz) makes
-     * it the central row. Those first elements, in the order of the layer, are the ones
-     * step 3 met first in their rows: RB0 lists their rows in that order, so the loop runs
-     * over RB0 instead of walking the layer a second time. */
-    for (int32_t i = 0; i < nb0; i++) {
-      const int32_t iy = RB0[i];
-      const int32_t row = B0[iy];
-      B0[iy] = nbs__mark(row); /* mark the row "old" */
-      /* The neighbouring rows of eq. 3.79: (iy-1,iz) may have been central already (read
-       * unmarked); rows of layer iz-1 are set 1 and never marked. */
-      const int32_t nrow[4] = {nbs__unmark(B0[iy - 1]), B1[iy - 1], B1[iy], B1[iy + 1]};
-
-      /* The five rows of steps 6-10 walked once side by side, so that their cache misses
-       * overlap and the walks of steps 6-8 find them cached. */
-      const int32_t rows[5] = {row, nrow[0], nrow[1], nrow[2], nrow[3]};
-      nbs__nbs_touch_rows(Y, x, 3, rows);
-
-      /* Step 6: the elements of the central row onto the x-lists of set 0; step 7: the
-       * elements of the neighbouring rows onto the x-lists of set 1 (the central row side by
-       * side with the first of them). */
-      int32_t na0 = 0, na1 = 0;
-      NBS__NBS_PUSH_ROWS(row, nrow[0], 3);
-      for (int l = 1; l < 4; l++) {
-        for (int32_t e = nrow[l]; e != NBS__EMPTY; e = Y[e]) NBS__NBS_PUSH_X(e, A1, RA1, na1, 3);
-      }
-
-      /* Step 8: loop over the central row; the first element in a "new" cell (ix,iy,iz)
-       * makes it the central cell: mark it and check it with the 13-cell mask (eq. 3.73). */
-      for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) {
-        int32_t ix = nbs__nbs_cell(g, x, 3, e, 0);
-        if (nbs__is_marked(A0[ix])) continue;
-        const int32_t c = A0[ix];
-        A0[ix] = nbs__mark(c);
-        const int32_t nb[4] = {nbs__unmark(A0[ix - 1]), A1[ix - 1], A1[ix], A1[ix + 1]};
-        NBS__NBS_TRY(nbs__nbs_check_cell(run, X, c, nb));
-      }
-
-      /* Steps 9 and 10: remove the x-lists of the central and of the neighbouring rows,
-       * resetting the heads they started. */
-      nbs__nbs_clear(A0, RA0, na0);
-      nbs__nbs_clear(A1, RA1, na1);
-    }
-
-    /* Step 11: remove the y-lists of the central layer and of layer iz-1. */
-    nbs__nbs_clear(B0, RB0, nb0);
-    nbs__nbs_clear(B1, RB1, nb1);
+    /* Steps 5-11 over the block. */
+    NBS__NBS_TRY(nbs__nbs_3d_layer(run, L, &K, nb0, nb1));
   }
 
-  /* Finally remove the z-lists, by a loop over the elements. */
-  for (int32_t k = 0; k < n; k++) C[nbs__nbs_cell(g, x, 3, k, 2)] = NBS__EMPTY;
+  /* Finally remove the z-lists (and their counts), by a loop over the elements. */
+  for (int32_t k = 0; k < n; k++) {
+    const int32_t iz = nbs__nbs_cell(g, x, 3, k, 2);
+    C[iz] = NBS__EMPTY;
+    CN[iz] = 0;
+  }
   return NBS_OK;
 }
 
 #undef NBS__NBS_PUSH
 #undef NBS__NBS_PUSH_X
-#undef NBS__NBS_PUSH_Y
+#undef NBS__NBS_PUSH_XB
+#undef NBS__NBS_TAKE
 #undef NBS__NBS_PUSH_ROWS
 #undef NBS__NBS_TRY
 
@@ -549,12 +692,20 @@ nbs_status nbs__nbs(nbs__run *run) {
     int32_t *h = ctx->work;
     const int64_t count = nbs__nbs_head_count(dim, cap);
     for (int64_t i = 0; i < count; i++) h[i] = NBS__EMPTY;
+    /* and every layer count 0 (3D; they follow the heads) */
+    const int64_t counts = nbs__nbs_count_count(dim, cap);
+    for (int64_t i = count; i < count + counts; i++) h[i] = 0;
     ctx->work_kind = NBS__WORK_NBS;
     for (int a = 0; a < 4; a++) ctx->work_cap[a] = cap[a];
   }
 
   nbs__nbs_layout L;
   nbs__nbs_layout_at(&L, ctx->work, dim, ctx->work_cap);
-  run->work_bytes = L.bytes;
-  return dim == 3 ? nbs__nbs_3d(run, &L) : nbs__nbs_2d(run, &L);
+  if (dim == 2) {
+    run->work_bytes = L.bytes;
+    return nbs__nbs_2d(run, &L);
+  }
+  const nbs_status s = nbs__nbs_3d(run, &L);
+  run->work_bytes = L.bytes + ctx->nbs_block_size;
+  return s;
 }

@@ -416,10 +416,11 @@ static nbs_status fz_expected(const fz_run *R, nbs_algorithm algo) {
   }
   case NBS_NBS: {
     if (!g->fits) return NBS_ERR_EXTENT;
-    /* heads (A: 2 (nx+2), B: ny+2 in 2D or 2 (ny+2) in 3D, C: nz+2) and the records of
-     * started lists (2 (nx+1), and 2 (ny+1) in 3D), all int32 */
+    /* heads (A: 2 (nx+2), B: ny+2 in 2D or 2 (ny+2) in 3D, C: nz+2), the layer counts
+     * (3D: nz+2) and the records of started lists (2 (nx+1), and 2 (ny+1) in 3D), all
+     * int32 */
     int64_t heads = 2 * (g->n[0] + 2) + (s->dim == 3 ? 2 : 1) * (g->n[1] + 2) +
-                    (s->dim == 3 ? g->n[2] + 2 : 0);
+                    (s->dim == 3 ? 2 * (g->n[2] + 2) : 0);
     int64_t records = 2 * (g->n[0] + 1) + (s->dim == 3 ? 2 * (g->n[1] + 1) : 0);
     return (uint64_t)(heads + records) * 4u > s->cell_budget ? NBS_ERR_BUDGET : NBS_OK;
   }
