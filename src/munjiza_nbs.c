@@ -301,6 +301,26 @@ static inline nbs_status nbs__nbs_check_cell(nbs__run *run, const nbs__nbs_block
   return NBS_OK;
 }
 
+/* The loop over a central row whose elements (linked by Y, from `row`) are on the x-lists
+ * of set 0 (A0) and whose neighbouring rows are on set 1 (A1): the first element met in a
+ * "new" cell makes it the central cell, which is marked "old" and checked with the contact
+ * mask (nbs__nbs_check_cell). x holds the coordinates the lists' entries refer to (dim per
+ * entry): the caller's in 2D, the layer block's in 3D. */
+static inline nbs_status nbs__nbs_check_row(nbs__run *run, const nbs__nbs_block *K,
+                                            const double *x, int dim, const int32_t *Y,
+                                            const int32_t *X, int32_t *A0, const int32_t *A1,
+                                            int32_t row) {
+  for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) {
+    const int32_t ix = nbs__nbs_cell(&run->grid, x, dim, e, 0);
+    if (nbs__is_marked(A0[ix])) continue;
+    const int32_t c = A0[ix];
+    A0[ix] = nbs__mark(c);
+    const int32_t nb[4] = {nbs__unmark(A0[ix - 1]), A1[ix - 1], A1[ix], A1[ix + 1]};
+    NBS__TRY(nbs__nbs_check_cell(run, K, X, c, nb));
+  }
+  return NBS_OK;
+}
+
 /* Propagates an error of the pair sink, forgetting the (now dirty) layout. */
 #define NBS__NBS_TRY(expr)                                                                    \
   do {                                                                                        \
@@ -387,14 +407,7 @@ static nbs_status nbs__nbs_2d(nbs__run *run, const nbs__nbs_layout *L) {
 
     /* Loop over the central row: the first element in a "new" cell makes it the central
      * cell; mark it and check it with the contact mask. */
-    for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) {
-      int32_t ix = nbs__nbs_cell(g, x, 2, e, 0);
-      if (nbs__is_marked(A0[ix])) continue;
-      const int32_t c = A0[ix];
-      A0[ix] = nbs__mark(c);
-      const int32_t nb[4] = {nbs__unmark(A0[ix - 1]), A1[ix - 1], A1[ix], A1[ix + 1]};
-      NBS__NBS_TRY(nbs__nbs_check_cell(run, NULL, X, c, nb));
-    }
+    NBS__NBS_TRY(nbs__nbs_check_row(run, NULL, x, 2, Y, X, A0, A1, row));
 
     /* Removal of the x-lists: reset the heads the two rows started. */
     nbs__nbs_clear(A0, RA0, na0);
@@ -514,14 +527,7 @@ static nbs_status nbs__nbs_3d_layer(nbs__run *run, const nbs__nbs_layout *L,
 
     /* Step 8: loop over the central row; the first element in a "new" cell (ix,iy,iz)
      * makes it the central cell: mark it and check it with the 13-cell mask (eq. 3.73). */
-    for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) {
-      const int32_t ix = 1 + nbs__cell(g, K->x + (size_t)e * 3, 0);
-      if (nbs__is_marked(A0[ix])) continue;
-      const int32_t c = A0[ix];
-      A0[ix] = nbs__mark(c);
-      const int32_t nb[4] = {nbs__unmark(A0[ix - 1]), A1[ix - 1], A1[ix], A1[ix + 1]};
-      NBS__TRY(nbs__nbs_check_cell(run, K, X, c, nb));
-    }
+    NBS__TRY(nbs__nbs_check_row(run, K, K->x, 3, Y, X, A0, A1, row));
 
     /* Steps 9 and 10: remove the x-lists of the central and of the neighbouring rows,
      * resetting the heads they started. */
