@@ -3,10 +3,10 @@
  * allocator's, and no allocation in detections after the first (a simulation's time steps).
  */
 #include "internal.h"
-
-#include <stdlib.h>
 #include "test.h"
 #include "util.h"
+
+#include <stdlib.h>
 
 /* The entries of NBS's layer block (3D): the most elements a layer and the one below it
  * hold together, on the grid the library derives (nbs__prepare); at least 1. */
