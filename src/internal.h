@@ -234,6 +234,11 @@ nbs_status nbs__direct(nbs__run *run);
 nbs_status nbs__screening(nbs__run *run);
 nbs_status nbs__sorting(nbs__run *run);
 nbs_status nbs__nbs(nbs__run *run);
+/* NBS's lists per axis for the run's grid and elements: the cells of each axis, or, where
+ * the heads would outweigh the elements, fewer lists onto which the axis is folded
+ * (munjiza_nbs.c, "Folded axes"). Fills lists[] (1 past dim) and returns true when an axis
+ * is folded. */
+bool nbs__nbs_fold(const nbs__run *run, int64_t lists[3]);
 nbs_status nbs__cellsort(nbs__run *run);
 /* True when cellsort's 64-bit cell key can index the grid (auto's test). */
 bool nbs__cellsort_fits(const nbs__grid *g);

@@ -651,6 +651,58 @@ static void test_one_line(void) {
   }
 }
 
+/* NBS folds the axes of a domain whose heads would outweigh its elements (a crowded cluster
+ * and two elements 3e5 cells away): cell c of an axis goes on list c mod m, and the
+ * neighbour of list m - 1 is list 0. The cluster (a jittered lattice at spacing 0.9, so that
+ * every element touches its neighbours) is moved through two periods of the fold in steps of
+ * 1.7 cells, so that its contacts meet the wrap-around at every place of the cluster. */
+static void test_folded_axes(void) {
+  for (int dim = 2; dim <= 3; dim++) {
+    const int side = dim == 2 ? 12 : 6, cluster = dim == 2 ? side * side : side * side * side;
+    const int64_t n = cluster + 3;
+    for (int step = 0; step < 20; step++) {
+      const double at = 0.3 + 1.7 * step;
+      scene s = new_scene(dim, n, 1.0, false);
+      for (int64_t k = 0; k < cluster; k++) {
+        int64_t q = k;
+        for (int a = 0; a < dim; a++) {
+          const double jitter = 0.05 * (double)((k * 7 + a * 3) % 5) - 0.1;
+          s.coords[k * dim + a] = at + 0.9 * (double)(q % side) + jitter;
+          q /= side;
+        }
+      }
+      /* one element at the origin (the grid's corner), two 3e5 cells out: fewer than the 2%
+       * at either end that NBS leaves out of an axis's core */
+      for (int64_t k = cluster + 1; k < n; k++) {
+        for (int a = 0; a < dim; a++) {
+          s.coords[k * dim + a] = 3e5 + 977.3 * (double)((k + a) % 2) + 0.25 * (double)a;
+        }
+      }
+      char label[96];
+      snprintf(label, sizeof label, "%dD cluster at %g cells, folded axes", dim, at);
+      const expect folded = {.status = {[NBS_SCREENING] = NBS_ERR_BUDGET}, .compressed = 0,
+                             .contacts = -1};
+      nbs_context *ctx;
+      ASSERT_OK(nbs_context_create(NULL, &ctx));
+      against_direct_in(ctx, label, &s, folded);
+      /* NBS did fold: its lists per axis are a power of two, far fewer than the cells */
+      nbs_input in = scene_input(&s);
+      nbs_detect_def def = nbs_default_detect_def();
+      def.algorithm = NBS_NBS;
+      ASSERT_OK(nbs_detect(ctx, &in, &def));
+      nbs_stats st;
+      nbs_last_stats(ctx, &st);
+      CHECK_MSG(st.compressed == 1, "%s: NBS did not fold", label);
+      for (int a = 0; a < dim; a++) {
+        CHECK_MSG(st.cells[a] >= 4 && st.cells[a] <= 64 && (st.cells[a] & (st.cells[a] - 1)) == 0,
+                  "%s: %lld lists on axis %d", label, (long long)st.cells[a], a);
+      }
+      nbs_context_destroy(ctx);
+      scene_free(&s);
+    }
+  }
+}
+
 /* ---- budgets ---------------------------------------------------------------------------- */
 
 /* auto succeeds for every finite input, whatever the cell budget: it falls back to sorting
@@ -709,6 +761,7 @@ int main(int argc, char **argv) {
       {"denormal_diameters", test_denormal_diameters},
       {"huge_radii", test_huge_radii},
       {"one_line", test_one_line},
+      {"folded_axes", test_folded_axes},
       {"auto_tight_budget", test_auto_tight_budget},
   };
   int rc = test_main(argc, argv, tests, sizeof tests / sizeof *tests);

@@ -9,19 +9,25 @@
 #include <stdlib.h>
 
 /* The entries of NBS's layer block (3D): the most elements a layer and the one below it
- * hold together, on the grid the library derives (nbs__prepare); at least 1. */
+ * hold together, on the grid the library derives (nbs__prepare) and with its layers folded
+ * as the library folds them (nbs__nbs_fold: layer iz is list iz mod m, and the list below
+ * list 0 is list m - 1); at least 1. */
 static int64_t nbs_block_entries(nbs_context *ctx, const nbs_input *in) {
   nbs__run run;
   memset(&run, 0, sizeof run);
   run.ctx = ctx;
   if (nbs__prepare(&run, in) != NBS_OK) abort();
-  const int64_t nz = run.grid.n[2];
-  int64_t *count = calloc((size_t)nz + 2, sizeof *count);
+  int64_t lists[3];
+  nbs__nbs_fold(&run, lists);
+  const int64_t nz = lists[2];
+  const bool folded = nz < run.grid.n[2];
+  int64_t *count = calloc((size_t)nz, sizeof *count);
   if (!count) abort();
-  for (int64_t k = 0; k < in->n; k++) count[1 + nbs__cell(&run.grid, in->coords + 3 * k, 2)]++;
+  for (int64_t k = 0; k < in->n; k++) count[nbs__cell(&run.grid, in->coords + 3 * k, 2) % nz]++;
   int64_t most = 1;
-  for (int64_t iz = 1; iz <= nz; iz++) {
-    if (count[iz] > 0 && count[iz] + count[iz - 1] > most) most = count[iz] + count[iz - 1];
+  for (int64_t iz = 0; iz < nz; iz++) {
+    const int64_t below = iz > 0 ? count[iz - 1] : folded ? count[nz - 1] : 0;
+    if (count[iz] > 0 && count[iz] + below > most) most = count[iz] + below;
   }
   free(count);
   return most;
@@ -33,11 +39,14 @@ static int64_t nbs_block_entries(nbs_context *ctx, const nbs_input *in) {
  * block of 36 bytes per entry (see src/munjiza_nbs.c). The padding cells on each side of
  * each head array and the spare entry of each record are the fixed overhead. */
 static void test_nbs_formula(void) {
-  const double fractions[] = {0.5, 0.05, 0.001};
+  /* uniform at three fractions; sparse and clustered, whose far elements fold the axes */
+  const scene_kind kinds[] = {SCENE_UNIFORM, SCENE_UNIFORM, SCENE_UNIFORM, SCENE_SPARSE,
+                              SCENE_CLUSTERED};
+  const double fractions[] = {0.5, 0.05, 0.001, 0.5, 0.5};
   for (int dim = 2; dim <= 3; dim++) {
-    for (int f = 0; f < 3; f++) {
+    for (int f = 0; f < 5; f++) {
       for (int64_t n = 1000; n <= 64000; n *= 4) {
-        scene s = test_scene(SCENE_UNIFORM, dim, n, fractions[f]);
+        scene s = test_scene(kinds[f], dim, n, fractions[f]);
         nbs_context *ctx;
         ASSERT_OK(nbs_context_create(NULL, &ctx));
         nbs_input in = scene_input(&s);
@@ -53,8 +62,12 @@ static void test_nbs_formula(void) {
         if (dim == 3) formula += nbs_block_entries(ctx, &in) * (in.radii ? 44 : 36);
         int64_t extra = (int64_t)st.work_bytes - formula;
         CHECK_MSG(extra >= 0 && extra <= 128,
-                  "%dD n=%lld fraction %g: NBS holds %zu work bytes, the formula %lld",
-                  dim, (long long)n, fractions[f], st.work_bytes, (long long)formula);
+                  "%dD %s n=%lld fraction %g: NBS holds %zu work bytes, the formula %lld",
+                  dim, scene_kind_name(kinds[f]), (long long)n, fractions[f], st.work_bytes,
+                  (long long)formula);
+        /* the far elements of sparse and clustered scenes fold every axis */
+        CHECK_MSG(st.compressed == (f >= 3), "%dD %s n=%lld: folded %d", dim,
+                  scene_kind_name(kinds[f]), (long long)n, st.compressed);
         /* everything the context holds: work, pairs, the context itself */
         CHECK_EQ(nbs_context_bytes(ctx),
                  st.work_bytes + st.pair_bytes + sizeof(struct nbs_context));

@@ -233,8 +233,10 @@ typedef struct nbs_stats {
   uint64_t pairs;      /* pairs reported (contacts, or candidates in candidate mode) */
   uint64_t candidates; /* pairs the cell mask yielded before the distance test */
   double cell_size;    /* edge of a cell (0 for direct) */
-  int64_t cells[3];    /* cells per axis (compressed axes: distinct cell coordinates) */
-  int compressed;      /* 1 if the axes were compressed because the grid was too large */
+  int64_t cells[3];    /* cells per axis (sorting's compressed axes: distinct cell
+                        * coordinates; nbs's folded axes: lists per axis) */
+  int compressed;      /* 1 if the axes were compressed (sorting) or folded (nbs) because
+                        * the grid was too large */
   size_t work_bytes;   /* bytes of the algorithm's arrays during this detection */
   size_t pair_bytes;   /* bytes of the pair buffer */
   int reused_order;    /* 1 if cellsort started from the last detection's cell order */

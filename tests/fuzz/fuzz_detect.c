@@ -396,6 +396,30 @@ static int fz_bits(int64_t count) {
   return b;
 }
 
+/* NBS's lists per axis: the cells of each axis of the grid, or fewer where NBS folds the
+ * axis. Which axes it folds is the library's choice (nbs__nbs_fold, asked here on the grid
+ * the library derives); what a folded axis must be is checked: a power of two >= 4, at most
+ * half the axis's cells. Its pairs are checked against direct checking like any other. */
+static void fz_nbs_lists(const fz_run *R, int64_t l[3]) {
+  nbs__run run;
+  memset(&run, 0, sizeof run);
+  run.ctx = R->ctx;
+  if (nbs__prepare(&run, &R->in) != NBS_OK) {
+    fprintf(stderr, "fuzz_detect: nbs__prepare refused an input the model calls valid\n");
+    abort();
+  }
+  nbs__nbs_fold(&run, l);
+  for (int a = 0; a < R->s->dim; a++) {
+    const int64_t n = R->grid.n[a];
+    if (l[a] != n && !(l[a] >= 4 && (l[a] & (l[a] - 1)) == 0 && 2 * l[a] <= n)) {
+      fprintf(stderr, "fuzz_detect: NBS folds %lld cells on axis %d onto %lld lists\n",
+              (long long)n, a, (long long)l[a]);
+      fz_dump(R->s);
+      abort();
+    }
+  }
+}
+
 /* The status a detection must return, apart from NBS_ERR_PAIRS (checked by the caller): the
  * documented refusals of each algorithm, predicted from the grid. An algorithm not listed
  * here must succeed on every finite input; a new algorithm with refusals of its own must
@@ -416,12 +440,14 @@ static nbs_status fz_expected(const fz_run *R, nbs_algorithm algo) {
   }
   case NBS_NBS: {
     if (!g->fits) return NBS_ERR_EXTENT;
+    int64_t l[3];
+    fz_nbs_lists(R, l);
     /* heads (A: 2 (nx+2), B: ny+2 in 2D or 2 (ny+2) in 3D, C: nz+2), the layer counts
      * (3D: nz+2) and the records of started lists (2 (nx+1), and 2 (ny+1) in 3D), all
-     * int32 */
-    int64_t heads = 2 * (g->n[0] + 2) + (s->dim == 3 ? 2 : 1) * (g->n[1] + 2) +
-                    (s->dim == 3 ? 2 * (g->n[2] + 2) : 0);
-    int64_t records = 2 * (g->n[0] + 1) + (s->dim == 3 ? 2 * (g->n[1] + 1) : 0);
+     * int32, with nx, ny, nz the lists per axis */
+    int64_t heads = 2 * (l[0] + 2) + (s->dim == 3 ? 2 : 1) * (l[1] + 2) +
+                    (s->dim == 3 ? 2 * (l[2] + 2) : 0);
+    int64_t records = 2 * (l[0] + 1) + (s->dim == 3 ? 2 * (l[1] + 1) : 0);
     return (uint64_t)(heads + records) * 4u > s->cell_budget ? NBS_ERR_BUDGET : NBS_OK;
   }
   case NBS_CELLSORT: {

@@ -206,6 +206,21 @@ def detect_seeds():
     s.body += bytes([0, 0, 0, 255]) + raw(-1.0) + bytes(6)
     seeds["radius_negative_2d"] = s
 
+    # NBS's folded axes: a crowded lattice and one element far out at either end of every
+    # axis (outside the core NBS measures), so that each axis is folded onto a few lists;
+    # the lattice's origin moves it across the wrap-around from list m - 1 to list 0
+    for dim in (2, 3):
+        for unit in ("d", "d/2"):
+            for origin in ("0", "0.5", "1"):
+                s = Seed(dim=dim, n=60, unit=unit, origin=origin)
+                for k in range(58):
+                    for a in range(dim):
+                        s.body += lattice(k, a, 8 if dim == 2 else 4)
+                for v in (-5000.0, 7000.3):
+                    for a in range(dim):
+                        s.body += op(6) + raw(v + 0.37 * a)
+                seeds[f"folded_{dim}d_{unit.replace('/', '_')}_{origin}"] = s
+
     for name, s in seeds.items():
         write("detect", name, s.data())
     return len(seeds)
