@@ -57,23 +57,35 @@
  * Folded axes (beyond the book, for memory). The heads follow the extent of the domain on
  * each axis, not its elements: a million elements in a box with a thousand more a million
  * cells away would need 2e6 heads per list set per axis, 84 bytes per element in 3D where
- * the box alone needs 4.7. When the heads and records would take more than half as many
- * ints as there are elements, nbs__nbs_fold measures each axis's core: the range of cells
- * that holds all but 2% at either end of up to 1024 elements spread evenly over the input.
- * An axis whose cells are at least twice the smallest power of two m >= 4 that is twice its
- * core is folded onto m lists: cell c goes on list c mod m (an AND), and the neighbours of
- * list i are i - 1 and i + 1 mod m (nbs__nbs_near), so that list m - 1 is next to list 0.
- * Nothing else changes: the lists are built, walked and removed as the book says. Every
- * pair of neighbouring cells still lands on neighbouring lists, exactly once (the offsets
- * -1, 0, +1 stay distinct mod m >= 3, so no pair is reached by two cells of the mask), and
- * cells that share a list but are m or more apart only add candidates, which the distance
- * test rejects. Since m is at least twice the core, the core's cells never share a list;
- * only the elements outside it (at most 4% of the sample) can fall on the core's lists.
- * A domain that is wide because its elements are spread thin (no core smaller than the
- * axis) is not folded: its heads keep the book's size. An unfolded grid runs a copy of the
- * steps compiled without the folding arithmetic (nbs__nbs_axes.fold is a constant in each).
- * Measured (N = 1e6, fraction 0.5, 0.1% of the elements 1e6 cells out, the bench's sparse
- * scene): work memory 3D 84.7 -> 4.73 MB, 2D 48.3 -> 8.08 MB, time the same within noise.
+ * the box alone needs 4.7; a million elements spread thin over 1e12 cells in 2D need 28 MB
+ * of heads where a crowded million needs 8. When the heads and records would take more
+ * than half as many ints as there are elements, nbs__nbs_fold folds axes: cell c goes on
+ * list c mod m (an AND: m is a power of two >= 4), and the neighbours of list i are i - 1
+ * and i + 1 mod m (nbs__nbs_near), so that list m - 1 is next to list 0. Nothing else
+ * changes: the lists are built, walked and removed as the book says. Every pair of
+ * neighbouring cells still lands on neighbouring lists, exactly once (the offsets -1, 0, +1
+ * stay distinct mod m >= 3, so no pair is reached by two cells of the mask), and cells that
+ * share a list but are m or more apart only add candidates, which the distance test
+ * rejects. How many lists, measured on up to 1024 elements spread evenly over the input:
+ *  - each axis covers its core (the cells from the 2% to the 98% point of the sample) and
+ *    a little more, rounded up, so that the cells of a crowded box never share a list and
+ *    only the elements outside it can fall on its lists;
+ *  - where those cells are still more than a budget, the elements are sparse or spread
+ *    thin, and x and y (in 3D; in 2D both) are scaled down to about the budget: 1.5 N
+ *    cells in 2D (about the cells of N elements crowded at fraction 0.5, so the heads take
+ *    no more than theirs and a list holds about as many elements; rounded down), 64 N in
+ *    3D (where the links and the layer block outweigh the heads; rounded up);
+ *  - scaling overlays cells far apart, which could pile elements onto a few lists where
+ *    they are not spread (a sheet, a lattice of the lists' period): the scaled axes are
+ *    doubled until the sample's pairs that share a list estimate no more than twice the
+ *    grid's own crowding plus 4 elements per list.
+ * An unfolded grid runs a copy of the steps compiled without the folding arithmetic
+ * (nbs__nbs_axes.fold is a constant in each). Measured (N = 1e6, bench scenes, work bytes
+ * against a crowded uniform scene's 4.72 MB in 3D and 8.03 MB in 2D): 3D sparse 84.2 ->
+ * 4.18 MB, clustered 8.78 -> 4.73, huge 4.41 (not folded); 2D sparse 48.2 -> 8.02, clustered
+ * 33.1 -> 8.02, huge 28.0 -> 8.02. The price is in 2D sparse scenes, whose lists now hold
+ * as many elements as crowded ones: as fast as a crowded scene, where the unfolded lists of
+ * a sparse one were about twice as fast.
  *
  * Measured on the 2-core AMD EPYC of bench/README.md, N = 1e6, fraction 0.5, random order,
  * one thread, before and after the deviations that are about speed, back to back: 3D 548 ->
@@ -115,7 +127,9 @@
  */
 #include "internal.h"
 
+#include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* ---- the work-block layout ----------------------------------------------------------- */
 
@@ -691,13 +705,90 @@ static int64_t nbs__nbs_grow(int64_t need) {
   return c < NBS__AXIS_MAX ? c : NBS__AXIS_MAX;
 }
 
-/* The elements an axis's core is measured on (see nbs__nbs_fold): at most this many, evenly
+/* The elements the fold is measured on (see nbs__nbs_fold): at most this many, evenly
  * spaced in the input. */
 #define NBS__NBS_SAMPLE 1024
 
-static int nbs__nbs_cmp32(const void *a, const void *b) {
-  const int32_t u = *(const int32_t *)a, v = *(const int32_t *)b;
-  return (u > v) - (u < v);
+/* The k-th smallest of v[0..s-1] (0-based), reordering v: Hoare's selection, O(s). */
+static uint32_t nbs__nbs_select(uint32_t *v, int64_t s, int64_t k) {
+  int64_t lo = 0, hi = s - 1;
+  while (lo < hi) {
+    const uint32_t p = v[lo + (hi - lo) / 2];
+    int64_t i = lo, j = hi;
+    while (i <= j) {
+      while (v[i] < p) i++;
+      while (v[j] > p) j--;
+      if (i <= j) {
+        const uint32_t t = v[i];
+        v[i++] = v[j];
+        v[j--] = t;
+      }
+    }
+    if (k <= j) {
+      hi = j;
+    } else if (k >= i) {
+      lo = i;
+    } else {
+      break; /* v[j+1..i-1] all equal p */
+    }
+  }
+  return v[k];
+}
+
+/* Element i of the fold's sample of s. */
+static const double *nbs__nbs_sample(const nbs__run *run, int64_t i, int64_t s) {
+  return run->x + (size_t)(i * run->n / s) * (size_t)run->dim;
+}
+
+/* Scratch of the fold's measurements (on the stack: about 28 kB). */
+typedef struct nbs__nbs_probe {
+  uint32_t cell[NBS__NBS_SAMPLE];
+  uint64_t key[2 * NBS__NBS_SAMPLE]; /* open addressing, at most half full */
+  uint16_t count[2 * NBS__NBS_SAMPLE];
+} nbs__nbs_probe;
+
+/* The pairs of the sample of s that share a list on every axis, with lists[a] lists on
+ * axis a (cell c on list c mod lists[a]), counted in a hash table of the lists met. A
+ * list's numbers are mixed into one 64-bit key: two lists taken for one only add a pair to
+ * an estimate. */
+static int64_t nbs__nbs_shared(const nbs__run *run, int64_t s, const int64_t lists[3],
+                               nbs__nbs_probe *P) {
+  static const uint64_t mix[3] = {0x9e3779b97f4a7c15u, 0xc2b2ae3d27d4eb4fu, 0x165667b19e3779f9u};
+  uint64_t size = 4;
+  while (size < 2 * (uint64_t)s) size *= 2;
+  memset(P->count, 0, size * sizeof *P->count);
+  int64_t pairs = 0;
+  for (int64_t i = 0; i < s; i++) {
+    const double *p = nbs__nbs_sample(run, i, s);
+    uint64_t k = 0;
+    for (int a = 0; a < run->dim; a++) {
+      k += ((uint32_t)nbs__cell(&run->grid, p, a) % (uint64_t)lists[a] + 1) * mix[a];
+    }
+    uint64_t h = (k ^ k >> 29) & (size - 1);
+    while (P->count[h] && P->key[h] != k) h = (h + 1) & (size - 1);
+    pairs += P->count[h]; /* the pairs this element makes with those on its list before it */
+    P->key[h] = k;
+    P->count[h]++;
+  }
+  return pairs;
+}
+
+/* Two axes a and b scaled by one factor so that they have about `budget` lists together,
+ * neither below 3 (nor above its own e). */
+static void nbs__nbs_scale2(const int64_t e[3], int64_t t[3], int a, int b, double budget) {
+  if ((double)e[a] * (double)e[b] <= budget) return;
+  const double f = sqrt(budget / ((double)e[a] * (double)e[b]));
+  t[a] = (int64_t)ceil((double)e[a] * f);
+  t[b] = (int64_t)ceil((double)e[b] * f);
+  if (t[a] < 3) {
+    t[a] = e[a] < 3 ? e[a] : 3;
+    t[b] = (int64_t)ceil(budget / (double)t[a]);
+  } else if (t[b] < 3) {
+    t[b] = e[b] < 3 ? e[b] : 3;
+    t[a] = (int64_t)ceil(budget / (double)t[b]);
+  }
+  if (t[a] > e[a]) t[a] = e[a];
+  if (t[b] > e[b]) t[b] = e[b];
 }
 
 bool nbs__nbs_fold(const nbs__run *run, int64_t lists[3]) {
@@ -706,24 +797,67 @@ bool nbs__nbs_fold(const nbs__run *run, int64_t lists[3]) {
   const int64_t n = run->n;
   for (int a = 0; a < 3; a++) lists[a] = a < dim ? g->n[a] : 1;
   const int64_t cap[4] = {g->n[0], g->n[1], dim == 3 ? g->n[2] : 0, n};
-  if (!g->fits || nbs__nbs_axis_bytes(dim, cap) <= (uint64_t)n * sizeof(int32_t) / 2) {
+  if (!g->fits || n < 2 || nbs__nbs_axis_bytes(dim, cap) <= (uint64_t)n * sizeof(int32_t) / 2) {
     return false;
   }
   const int64_t s = n < NBS__NBS_SAMPLE ? n : NBS__NBS_SAMPLE;
-  int32_t c[NBS__NBS_SAMPLE];
-  bool folded = false;
+  nbs__nbs_probe P;
+
+  /* 1. Each axis's extent to cover, e: its core (the cells from the 2% to the 98% point of
+   * the sample) with 1/16 and 2 cells more, enough for the whole of a crowded box whose 2%
+   * at either end the core leaves out; never more than the axis. */
+  int64_t e[3] = {1, 1, 1};
   for (int a = 0; a < dim; a++) {
-    for (int64_t i = 0; i < s; i++) {
-      c[i] = nbs__cell(g, run->x + (size_t)(i * n / s) * (size_t)dim, a);
+    for (int64_t i = 0; i < s; i++) P.cell[i] = (uint32_t)nbs__cell(g, nbs__nbs_sample(run, i, s), a);
+    const uint32_t low = nbs__nbs_select(P.cell, s, s / 50);
+    const int64_t core = (int64_t)nbs__nbs_select(P.cell, s, s - 1 - s / 50) - low + 1;
+    e[a] = core + core / 16 + 2;
+    if (e[a] > g->n[a]) e[a] = g->n[a];
+  }
+
+  /* 2. Where the extents hold more cells than a budget, the domain is sparse (or its
+   * elements are spread thin), and the axes are scaled down to about that many cells. In
+   * 2D the x-lists' heads and records are what grows with the cells (4 ints per list), so
+   * the budget is 1.5 N, about the cells of N elements crowded at fraction 0.5 (1.57 N): a
+   * list holds about as many elements as in a crowded grid, and the heads take no more than
+   * there. In 3D the links and the layer block outweigh the heads, so the budget is 16 N:
+   * the heads stay a few percent of the memory and a list holds 1/16 of an element. The
+   * layers are kept, up to N/4 of them (scaling z would fill the layer block). */
+  int64_t t[3] = {e[0], e[1], e[2]};
+  if (dim == 2) {
+    nbs__nbs_scale2(e, t, 0, 1, 1.5 * (double)n);
+  } else {
+    if (4 * t[2] > n) t[2] = n / 4 > 3 ? n / 4 : e[2] < 3 ? e[2] : 3;
+    nbs__nbs_scale2(e, t, 0, 1, 64.0 * (double)n / (double)t[2]);
+  }
+
+  /* 3. The lists of each axis: a power of two (a list is c AND m - 1) of at least 4 (so
+   * that the offsets -1, 0, +1 stay distinct), rounded down from a scaled t (the budget
+   * holds) and up from an extent (its cells never share a list); an axis is folded where
+   * that is fewer than its cells.
+   * Scaling overlays cells that are far apart, which costs only candidates when the
+   * elements are spread, but could pile them up if they are not (a sheet, a lattice whose
+   * period the lists repeat). The sample says: the pairs of it that would share a list must
+   * not estimate more than twice the grid's own crowding plus 4 more elements per list; else
+   * the scaled axes are doubled (up to their e) until they do. */
+  const int64_t cells[3] = {g->n[0], g->n[1], dim == 3 ? g->n[2] : 1};
+  const int64_t own = nbs__nbs_shared(run, s, cells, &P);
+  const double allowed = 2.0 * (double)own + 2.0 * (double)s * (double)(s - 1) / (double)(n - 1);
+  bool folded, scaled;
+  for (;;) {
+    folded = scaled = false;
+    for (int a = 0; a < dim; a++) {
+      int64_t m = 4;
+      while (m < t[a]) m *= 2;
+      if (t[a] < e[a]) {
+        scaled = true;
+        if (dim == 2 && m > t[a] && m > 4) m /= 2;
+      }
+      lists[a] = m < g->n[a] ? m : g->n[a];
+      folded |= m < g->n[a];
     }
-    qsort(c, (size_t)s, sizeof *c, nbs__nbs_cmp32);
-    const int64_t core = (int64_t)c[s - 1 - s / 50] - c[s / 50] + 1;
-    int64_t m = 4;
-    while (m < 2 * core) m *= 2;
-    if (2 * m <= g->n[a]) {
-      lists[a] = m;
-      folded = true;
-    }
+    if (!scaled || nbs__nbs_shared(run, s, lists, &P) <= allowed) break;
+    for (int a = 0; a < dim; a++) t[a] = 2 * t[a] < e[a] ? 2 * t[a] : e[a];
   }
   return folded;
 }

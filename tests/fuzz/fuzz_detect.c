@@ -398,8 +398,9 @@ static int fz_bits(int64_t count) {
 
 /* NBS's lists per axis: the cells of each axis of the grid, or fewer where NBS folds the
  * axis. Which axes it folds is the library's choice (nbs__nbs_fold, asked here on the grid
- * the library derives); what a folded axis must be is checked: a power of two >= 4, at most
- * half the axis's cells. Its pairs are checked against direct checking like any other. */
+ * the library derives); what a folded axis must be is checked: a power of two >= 4 (so
+ * that the offsets -1, 0, +1 stay distinct), fewer than the axis's cells. Its pairs are
+ * checked against direct checking like any other. */
 static void fz_nbs_lists(const fz_run *R, int64_t l[3]) {
   nbs__run run;
   memset(&run, 0, sizeof run);
@@ -411,7 +412,7 @@ static void fz_nbs_lists(const fz_run *R, int64_t l[3]) {
   nbs__nbs_fold(&run, l);
   for (int a = 0; a < R->s->dim; a++) {
     const int64_t n = R->grid.n[a];
-    if (l[a] != n && !(l[a] >= 4 && (l[a] & (l[a] - 1)) == 0 && 2 * l[a] <= n)) {
+    if (l[a] != n && !(l[a] >= 4 && (l[a] & (l[a] - 1)) == 0 && l[a] < n)) {
       fprintf(stderr, "fuzz_detect: NBS folds %lld cells on axis %d onto %lld lists\n",
               (long long)n, a, (long long)l[a]);
       fz_dump(R->s);
