@@ -687,12 +687,8 @@ static void test_folded_axes(void) {
       ASSERT_OK(nbs_context_create(NULL, &ctx));
       against_direct_in(ctx, label, &s, folded);
       /* NBS did fold: a power of two of lists per axis, far fewer than the cells */
-      nbs_input in = scene_input(&s);
-      nbs_detect_def def = nbs_default_detect_def();
-      def.algorithm = NBS_NBS;
-      ASSERT_OK(nbs_detect(ctx, &in, &def));
       nbs_stats st;
-      nbs_last_stats(ctx, &st);
+      ASSERT_OK(detect_stats(ctx, &s, NBS_NBS, &st));
       CHECK_MSG(st.compressed == 1, "%s: NBS did not fold", label);
       for (int a = 0; a < dim; a++) {
         CHECK_MSG(st.cells[a] >= 4 && st.cells[a] <= 64 && (st.cells[a] & (st.cells[a] - 1)) == 0,
@@ -732,12 +728,8 @@ static void test_folded_lattice(void) {
     nbs_context *ctx;
     ASSERT_OK(nbs_context_create(NULL, &ctx));
     against_direct_in(ctx, label, &s, want);
-    nbs_input in = scene_input(&s);
-    nbs_detect_def def = nbs_default_detect_def();
-    def.algorithm = NBS_NBS;
-    ASSERT_OK(nbs_detect(ctx, &in, &def));
     nbs_stats st;
-    nbs_last_stats(ctx, &st);
+    ASSERT_OK(detect_stats(ctx, &s, NBS_NBS, &st));
     CHECK_MSG(st.candidates <= (uint64_t)n, "%s: %llu candidates for %lld elements", label,
               (unsigned long long)st.candidates, (long long)n);
     nbs_context_destroy(ctx);

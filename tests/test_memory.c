@@ -62,12 +62,9 @@ static void test_nbs_formula(void) {
         scene s = test_scene(kinds[f], dim, n, fractions[f]);
         nbs_context *ctx;
         ASSERT_OK(nbs_context_create(NULL, &ctx));
-        nbs_input in = scene_input(&s);
-        nbs_detect_def def = nbs_default_detect_def();
-        def.algorithm = NBS_NBS;
-        ASSERT_OK(nbs_detect(ctx, &in, &def));
         nbs_stats st;
-        nbs_last_stats(ctx, &st);
+        ASSERT_OK(detect_stats(ctx, &s, NBS_NBS, &st));
+        nbs_input in = scene_input(&s);
         int64_t ints = dim == 2 ? st.cells[1] + 2 * st.cells[0] + 2 * n + 2 * st.cells[0]
                                 : 2 * st.cells[2] + 2 * st.cells[1] + 2 * st.cells[0] + n +
                                       2 * st.cells[1] + 2 * st.cells[0];
@@ -117,12 +114,8 @@ static void test_nbs_against_crowded(void) {
         scene s = test_scene(kind, dim, n, kind == SCENE_SPARSE ? 0.005 : 0.5);
         nbs_context *ctx;
         ASSERT_OK(nbs_context_create(NULL, &ctx));
-        nbs_input in = scene_input(&s);
-        nbs_detect_def def = nbs_default_detect_def();
-        def.algorithm = NBS_NBS;
-        ASSERT_OK(nbs_detect(ctx, &in, &def));
         nbs_stats st;
-        nbs_last_stats(ctx, &st);
+        ASSERT_OK(detect_stats(ctx, &s, NBS_NBS, &st));
         work[k] = st.work_bytes;
         nbs_context_destroy(ctx);
         scene_free(&s);

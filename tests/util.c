@@ -131,3 +131,12 @@ nbs_allocator test_allocator(test_alloc *ta) {
   nbs_allocator a = {test_alloc_fn, test_free_fn, ta, ta->with_realloc ? test_realloc_fn : NULL};
   return a;
 }
+
+nbs_status detect_stats(nbs_context *ctx, const scene *s, nbs_algorithm algo, nbs_stats *st) {
+  nbs_input in = scene_input(s);
+  nbs_detect_def def = nbs_default_detect_def();
+  def.algorithm = algo;
+  nbs_status status = nbs_detect(ctx, &in, &def);
+  nbs_last_stats(ctx, st);
+  return status;
+}
