@@ -740,7 +740,7 @@ static const double *nbs__nbs_sample(const nbs__run *run, int64_t i, int64_t s) 
   return run->x + (size_t)(i * run->n / s) * (size_t)run->dim;
 }
 
-/* Scratch of the fold's measurements (on the stack: about 28 kB). */
+/* Scratch of the fold's measurements (on the stack: 24 kB). */
 typedef struct nbs__nbs_probe {
   uint32_t cell[NBS__NBS_SAMPLE];
   uint64_t key[2 * NBS__NBS_SAMPLE]; /* open addressing, at most half full */
@@ -774,7 +774,7 @@ static int64_t nbs__nbs_shared(const nbs__run *run, int64_t s, const int64_t lis
 }
 
 /* Two axes a and b scaled by one factor so that they have about `budget` lists together,
- * neither below 3 (nor above its own e). */
+ * neither below 3 nor above its own e (nbs__nbs_fold then rounds to a power of two >= 4). */
 static void nbs__nbs_scale2(const int64_t e[3], int64_t t[3], int a, int b, double budget) {
   if ((double)e[a] * (double)e[b] <= budget) return;
   const double f = sqrt(budget / ((double)e[a] * (double)e[b]));
@@ -820,14 +820,15 @@ bool nbs__nbs_fold(const nbs__run *run, int64_t lists[3]) {
    * 2D the x-lists' heads and records are what grows with the cells (4 ints per list), so
    * the budget is 1.5 N, about the cells of N elements crowded at fraction 0.5 (1.57 N): a
    * list holds about as many elements as in a crowded grid, and the heads take no more than
-   * there. In 3D the links and the layer block outweigh the heads, so the budget is 16 N:
-   * the heads stay a few percent of the memory and a list holds 1/16 of an element. The
+   * there. In 3D the links and the layer block outweigh the heads, so the budget is 64 N:
+   * the heads stay a few percent of the memory and a list holds 1/64 of an element. The
    * layers are kept, up to N/4 of them (scaling z would fill the layer block). */
   int64_t t[3] = {e[0], e[1], e[2]};
   if (dim == 2) {
     nbs__nbs_scale2(e, t, 0, 1, 1.5 * (double)n);
   } else {
-    if (4 * t[2] > n) t[2] = n / 4 > 3 ? n / 4 : e[2] < 3 ? e[2] : 3;
+    if (4 * t[2] > n) t[2] = n / 4 > 3 ? n / 4 : 3;
+    if (t[2] > e[2]) t[2] = e[2];
     nbs__nbs_scale2(e, t, 0, 1, 64.0 * (double)n / (double)t[2]);
   }
 

@@ -703,7 +703,7 @@ static void test_folded_axes(void) {
 /* Where NBS scales sparse axes down, cells far apart share lists; elements on a lattice
  * whose period is a multiple of 8 cells would fall on a few lists per axis (lattice
  * coordinate i at cell 1000 i is on list 40 i mod 64 of 64, one of 8) and make every element
- * a candidate of hundreds. The fold measures that on its sample and folds less: the
+ * a candidate of dozens. The fold measures that on its sample and folds less: the
  * candidates stay those of a spread scene. With the check removed from nbs__nbs_fold:
  * 129,025 candidates in 2D and 63,489 in 3D, for 4096 elements. */
 static void test_folded_lattice(void) {
