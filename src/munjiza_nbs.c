@@ -11,7 +11,7 @@
  *   2D:  y-lists B[ny] + Y[N]            one list per row of cells
  *        x-lists A[2][nx] + X[N]         one list per cell of the central row (set 0) and of
  *                                        the row below it (set 1)
- *   3D:  z-lists C[nz] + Z[N]            one list per layer
+ *   3D:  z-lists C[nz] + Z[N]            one list per layer (kept as up to 8, below)
  *        y-lists B[2][ny] + Y[M]         rows of the central layer (set 0), of the layer
  *                                        below it (set 1)
  *        x-lists A[2][nx] + X[M]         cells of the central row (set 0), of its neighbour
@@ -21,9 +21,10 @@
  * looping over cells, and each list is removed by resetting only the heads the elements that
  * built it touched. Time is therefore proportional to N whatever the packing density and the
  * extent of the domain (eqs. 3.63-3.64), and memory is ny + 2nx + 2N integers in 2D
- * (eq. 3.65). In 3D it is nz + 2ny + 2nx + N integers and a layer block of M <= N entries
- * of 36 bytes (below) where eq. 3.80 has 3N integers, plus, in both, the records described
- * below (2nx in 2D, 2nx + 2ny in 3D) and in 3D nz layer counts.
+ * (eq. 3.65). In 3D it is w nz + 2ny + 2nx + N integers (w <= 8 z-lists per layer, with
+ * w nz <= N / 16) and a layer block of M <= N entries of 36 bytes (below) where eq. 3.80
+ * has nz + 2ny + 2nx + 3N integers, plus, in both, the records described below (2nx in 2D,
+ * 2nx + 2ny in 3D) and in 3D nz layer counts.
  *
  * Deviations from the book's text, all of them representation only:
  *  - 0-based element indices, and the end of a list is NBS__EMPTY (-1);
@@ -31,7 +32,8 @@
  *    stored at index i + 1 and i - 1, i + 1 are always valid indices;
  *  - a list is marked "old" by storing -2 - head (nbs__mark) instead of adding 2N, which
  *    would overflow int32 for large N; a marked head read as a neighbour goes through
- *    nbs__unmark. Lists of set 1 are never marked;
+ *    nbs__unmark. Lists of set 1 are never marked. A layer (3D), whose z-list is w heads,
+ *    is marked in its count instead: CN[iz] = -1 once its elements are counted (step 2);
  *  - records of started heads (RB0, RB1 of at most ny entries, RA0, RA1 of at most nx): a
  *    push that starts a list (its head was empty) also notes the head's index. The removal
  *    of a set of lists (3D steps 9, 10, 11; the 2D removal of x-lists) resets the heads its
@@ -42,9 +44,13 @@
  *    element, so the central rows come in the book's order without a second walk of the
  *    layer (the rows are still found by the loop over the elements of the layer, step 3's);
  *  - walks of independent lists go side by side (2D: the central row and the row below it;
- *    3D: steps 3 and 4). In random element order every step of a list is a cache miss;
- *    walked side by side the misses overlap. Each list still receives its elements in the
- *    book's order, so the pairs come out in the same order as from the plain rendering;
+ *    3D: steps 3 and 4, and the four neighbour lists of a central cell). In random element
+ *    order every step of a list is a cache miss; walked side by side the misses overlap;
+ *  - 3D: a layer's z-list is kept as w lists (nbs__nbs_zways: 8 where their heads stay
+ *    within N / 16 ints, fewer where there are many layers), element k on list k mod w, so
+ *    that steps 3 and 4 walk 8 lists side by side where the book's one list would be walked
+ *    a cache miss at a time. The layer's elements are the union of its lists; only the
+ *    order in which the y-lists receive them changes, and with it the order of the pairs;
  *  - 3D: the layer block. Steps 3 and 4 copy each element they meet (coordinates, radius,
  *    number) into the next entry of a block that holds the central layer and the layer
  *    below it, and the y- and x-lists link entries of the block instead of elements
@@ -52,6 +58,25 @@
  *    the pairs are stored under the elements' numbers. The block has as many entries M as
  *    the largest layer and the one below it hold together: step 1 counts each layer's
  *    elements (CN[nz]), and a pass over the elements takes the largest sum before step 2.
+ *    An entry is 32 bytes, coordinates, x-link and number together, so that a candidate
+ *    costs one cache line, not three;
+ *  - 3D: chains of layers. Step 2 makes the layer of the first element of a new z-list
+ *    central, as the book says; when steps 5-11 are done with it, the layer above it, if
+ *    it is new and not empty, is made central next, and so on up, until a layer above is
+ *    empty or old (the order of the central layers is the only change: each is central
+ *    once, with the same neighbouring layer). The neighbouring layer of each layer of a
+ *    chain after the first is the layer just done, whose elements are already in the
+ *    block: step 4 pushes those entries onto the y-lists of set 1 instead of walking its
+ *    z-lists again, and only the new central layer is walked, into the entries after them
+ *    (the block is a ring; the two layers never hold more than M entries together). In
+ *    random element order the walks of steps 3-4 are the misses that remain, and this
+ *    halves them: a uniform scene is one or two chains;
+ *  - 3D: the candidates of a central cell. The four neighbour lists are walked side by side
+ *    (an entry before the block's first, its sentinel, links to NBS__EMPTY, so that an
+ *    ended walk stays ended without a branch); the entries met are gathered, and each
+ *    element of the cell is tested against them in a loop that stores every pair and keeps
+ *    it by counting it only when the elements touch: no branch per candidate for the
+ *    processor to mispredict (about 1 in 6 candidates touches, in no pattern).
  *
  *
  * Folded axes (beyond the book, for memory). The heads follow the extent of the domain on
@@ -104,20 +129,22 @@
  * and 176 ns for 2, 4 and 8 walks).
  *
  * The work block (ctx->work, work_kind NBS__WORK_NBS) holds, as int32:
- *   [ C: nz+2 ] [ B0: ny+2 ] [ B1: ny+2 ] [ A0: nx+2 ] [ A1: nx+2 ] [ CN: nz+2 ]
+ *   [ C: w(nz+2) ] [ B0: ny+2 ] [ B1: ny+2 ] [ A0: nx+2 ] [ A1: nx+2 ] [ CN: nz+2 ]
  *   [ RB0: ny+1 ] [ RB1: ny+1 ] [ RA0: nx+1 ] [ RA1: nx+1 ] [ Z: N ]
  * in 3D, and in 2D
  *   [ B: ny+2 ] [ A0: nx+2 ] [ A1: nx+2 ] [ RA0: nx+1 ] [ RA1: nx+1 ] [ Y: N ] [ X: N ]
- * that is 4 (N + 2nz + 4ny + 4nx + 16) bytes in 3D and 4 (2N + ny + 4nx + 8) in 2D: eqs. 3.80
- * (without Y and X) and 3.65, the records, the counts and the padding (a record has one
- * spare entry, written and not counted by a push that starts no list). nx, ny, nz, N here
+ * that is 4 (N + (w + 1) nz + 4ny + 4nx + 14 + 2w) bytes in 3D (w = nbs__nbs_zways(nz, N))
+ * and 4 (2N + ny + 4nx + 8) in 2D: eqs. 3.80 (without Y and X) and 3.65, the records, the
+ * counts and the padding (a record has one spare entry, written and not counted by a push
+ * that starts no list). nx, ny, nz, N here
  * are the capacities ctx->work_cap[0], [1], [2], [3]: exactly the lists per axis (the grid's
  * cells, or fewer on a folded axis) and N of the first
  * detection, grown later only when a detection needs more (axes then get 1/8 slack, within
  * the cell budget). work_cap[2] is 0 for the 2D layout (a 3D grid always has nz >= 1), which
  * is how the dimension is encoded. The layer block is its own allocation (ctx->nbs_block),
- * of exactly M entries the first time and grown with 1/8 slack when a later detection needs
- * more; nothing in it outlives a detection.
+ * of exactly M entries and the sentinel the first time and grown with 1/8 slack when a
+ * later detection needs more; nothing in it outlives a detection but the sentinel, which
+ * is written at every detection.
  * All heads are contiguous at the start, and between detections every head is NBS__EMPTY
  * and every count 0 (the book's step 0, done once when the layout is created); the next
  * arrays, the records and the block need no initialisation because an entry is always
@@ -133,9 +160,19 @@
 
 /* ---- the work-block layout ----------------------------------------------------------- */
 
+/* The most lists a layer's z-list is kept as (see nbs__nbs_zways). */
+#define NBS__NBS_ZWAYS 8
+
+int nbs__nbs_zways(int64_t nz, int64_t n) {
+  int w = NBS__NBS_ZWAYS;
+  while (w > 1 && (int64_t)w * (nz + 2) > n / 16) w /= 2;
+  return w;
+}
+
 typedef struct nbs__nbs_layout {
   size_t bytes;       /* heads and next arrays */
-  int32_t *C;         /* z-list heads (3D only) */
+  int32_t *C;         /* z-list heads (3D only): zways per layer */
+  int32_t zways;      /* the lists a layer's z-list is kept as (nbs__nbs_zways) */
   int32_t *B0;        /* y-list heads; in 2D the only set */
   int32_t *B1;        /* y-list heads of the layer below the central one (3D only) */
   int32_t *A0;        /* x-list heads of the central row */
@@ -152,7 +189,7 @@ static int64_t nbs__nbs_head_count(int dim, const int64_t cap[4]) {
   int64_t h = 2 * (cap[0] + 2); /* A[2][nx] */
   if (dim == 3) {
     h += 2 * (cap[1] + 2); /* B[2][ny] */
-    h += cap[2] + 2;       /* C[nz] */
+    h += nbs__nbs_zways(cap[2], cap[3]) * (cap[2] + 2); /* C[nz][ways] */
   } else {
     h += cap[1] + 2; /* B[ny] */
   }
@@ -194,13 +231,15 @@ static void nbs__nbs_layout_at(nbs__nbs_layout *L, void *work, int dim, const in
   L->bytes = (size_t)nbs__nbs_layout_bytes(dim, cap);
   if (dim == 3) {
     L->C = w;
-    w += cap[2] + 2;
+    L->zways = nbs__nbs_zways(cap[2], cap[3]);
+    w += L->zways * (cap[2] + 2);
     L->B0 = w;
     w += cap[1] + 2;
     L->B1 = w;
     w += cap[1] + 2;
   } else {
     L->C = NULL;
+    L->zways = 0;
     L->B0 = w;
     w += cap[1] + 2;
     L->B1 = NULL;
@@ -310,16 +349,29 @@ static nbs_status nbs__nbs_abort(nbs__run *run, nbs_status s) {
  *
  * Its capacity is the largest number of elements in a layer and the one below it, counted
  * by step 1 (CN[iz], one int per layer) and taken before step 2. */
+typedef struct nbs__nbs_entry {
+  double x[3]; /* the element's coordinates */
+  int32_t X;   /* the entry's link in the x-lists */
+  int32_t id;  /* the element's number */
+} nbs__nbs_entry;
+
 typedef struct nbs__nbs_block {
-  double *x;        /* 3 coordinates per entry */
-  double *r;        /* a radius per entry, or NULL */
-  int32_t *id;      /* the element's number */
-  int32_t *Y, *X;   /* the entry's links in the y- and x-lists */
+  nbs__nbs_entry *e; /* the entries */
+  double *r;         /* a radius per entry, or NULL */
+  int32_t *Y;        /* the entry's link in the y-lists */
 } nbs__nbs_block;
+
+/* The doubles from one entry's coordinates to the next's. */
+#define NBS__NBS_STRIDE ((int)(sizeof(nbs__nbs_entry) / sizeof(double)))
 
 /* Bytes of one entry of the layer block. */
 static size_t nbs__nbs_entry_bytes(bool radii) {
-  return 3 * sizeof(double) + (radii ? sizeof(double) : 0) + 3 * sizeof(int32_t);
+  return sizeof(nbs__nbs_entry) + (radii ? sizeof(double) : 0) + sizeof(int32_t);
+}
+
+/* The link in the x-lists of entry a: the block's (3D, K) or the elements' array X (2D). */
+static inline int32_t *nbs__nbs_xlink(const nbs__nbs_block *K, int32_t *X, int32_t a) {
+  return K ? &K->e[a].X : &X[a];
 }
 
 /* Checks the central cell, whose x-list (set 0, linked by X) starts at c, with the contact
@@ -341,25 +393,107 @@ static inline nbs_status nbs__nbs_pair(nbs__run *run, const nbs__nbs_block *K, i
    * nbs__offer_at taking the points, shared with nbs__offer, made direct 3-17% slower and
    * this 3% slower with GCC 12, depending on how it passed the radii.) */
   run->candidates++;
+  const nbs__nbs_entry *ea = &K->e[a], *eb = &K->e[b];
   if (run->mode == NBS_MODE_CONTACTS) {
     const bool r = K->r != NULL;
-    if (!nbs__touch_at(K->x + (size_t)a * 3, K->x + (size_t)b * 3, 3, r, r ? K->r[a] : 0,
-                       r ? K->r[b] : 0, run->d2)) {
-      return NBS_OK;
-    }
+    if (run->count == run->cap) NBS__TRY(nbs__flush(run));
+    const bool t = nbs__touch_at(ea->x, eb->x, 3, r, r ? K->r[a] : 0, r ? K->r[b] : 0, run->d2);
+    const int32_t ia = ea->id, ib = eb->id;
+    nbs_pair p;
+    p.i = ia < ib ? ia : ib;
+    p.j = ia < ib ? ib : ia;
+    run->buf[run->count] = p;
+    run->count += t;
+    run->emitted += t;
+    return NBS_OK;
   }
-  return nbs__emit(run, K->id[a], K->id[b]);
+  return nbs__emit(run, ea->id, eb->id);
 }
 
 static inline nbs_status nbs__nbs_check_cell(nbs__run *run, const nbs__nbs_block *K,
-                                             const int32_t *X, int32_t c, const int32_t nb[4]) {
-  for (int32_t a = c; a != NBS__EMPTY; a = X[a]) {
-    for (int32_t b = X[a]; b != NBS__EMPTY; b = X[b]) NBS__TRY(nbs__nbs_pair(run, K, a, b));
+                                             int32_t *X, int32_t c, const int32_t nb[4]) {
+#define NBS__NBS_NEXT(a) (*nbs__nbs_xlink(K, X, (a)))
+  for (int32_t a = c; a != NBS__EMPTY; a = NBS__NBS_NEXT(a)) {
+    for (int32_t b = NBS__NBS_NEXT(a); b != NBS__EMPTY; b = NBS__NBS_NEXT(b)) {
+      NBS__TRY(nbs__nbs_pair(run, K, a, b));
+    }
   }
   for (int l = 0; l < 4; l++) {
     if (nb[l] == NBS__EMPTY) continue;
-    for (int32_t a = c; a != NBS__EMPTY; a = X[a]) {
-      for (int32_t b = nb[l]; b != NBS__EMPTY; b = X[b]) NBS__TRY(nbs__nbs_pair(run, K, a, b));
+    for (int32_t a = c; a != NBS__EMPTY; a = NBS__NBS_NEXT(a)) {
+      for (int32_t b = nb[l]; b != NBS__EMPTY; b = NBS__NBS_NEXT(b)) {
+        NBS__TRY(nbs__nbs_pair(run, K, a, b));
+      }
+    }
+  }
+#undef NBS__NBS_NEXT
+  return NBS_OK;
+}
+
+/* nbs__nbs_pair of entry a with each of the n entries got[]: in contact mode, where the pair
+ * buffer has room for them all, without a branch per pair (each pair is stored, and kept
+ * by counting it only when the elements touch). */
+static inline nbs_status nbs__nbs_pairs(nbs__run *run, const nbs__nbs_block *K, int32_t a,
+                                        const int32_t *got, int n) {
+  if (run->mode != NBS_MODE_CONTACTS || run->cap - run->count < (size_t)n) {
+    for (int j = 0; j < n; j++) NBS__TRY(nbs__nbs_pair(run, K, a, got[j]));
+    return NBS_OK;
+  }
+  const nbs__nbs_entry *ea = &K->e[a];
+  const double *kr = K->r;
+  const double d2 = run->d2;
+  nbs_pair *out = run->buf + run->count;
+  size_t kept = 0;
+  for (int j = 0; j < n; j++) {
+    const int32_t b = got[j];
+    const nbs__nbs_entry *eb = &K->e[b];
+    const bool t = nbs__touch_at(ea->x, eb->x, 3, kr != NULL, kr ? kr[a] : 0, kr ? kr[b] : 0, d2);
+    const int32_t ia = ea->id, ib = eb->id;
+    nbs_pair p;
+    p.i = ia < ib ? ia : ib;
+    p.j = ia < ib ? ib : ia;
+    out[kept] = p;
+    kept += t;
+  }
+  run->count += kept;
+  run->emitted += kept;
+  run->candidates += (uint64_t)n;
+  return NBS_OK;
+}
+
+/* Entries gathered from the neighbour lists at a time (nbs__nbs_check_cell3). */
+#define NBS__NBS_GATHER 64
+
+/* nbs__nbs_check_cell in 3D, on the block K: the same pairs, the four neighbour lists walked
+ * side by side. K->e[-1] is a sentinel whose link is NBS__EMPTY, so that a walk that has
+ * ended stays ended without a branch; the entries met are gathered, up to NBS__NBS_GATHER
+ * at a time, and every element of the central cell is tested against them. */
+static inline nbs_status nbs__nbs_check_cell3(nbs__run *run, const nbs__nbs_block *K, int32_t c,
+                                              const int32_t nb[4]) {
+  const nbs__nbs_entry *E = K->e;
+  for (int32_t a = c; a != NBS__EMPTY; a = E[a].X) {
+    for (int32_t b = E[a].X; b != NBS__EMPTY; b = E[b].X) NBS__TRY(nbs__nbs_pair(run, K, a, b));
+  }
+  int32_t b0 = nb[0], b1 = nb[1], b2 = nb[2], b3 = nb[3];
+  int32_t got[NBS__NBS_GATHER];
+  while ((b0 & b1 & b2 & b3) != NBS__EMPTY) { /* some walk goes on (EMPTY is all ones) */
+    int n = 0;
+    do {
+      got[n] = b0;
+      n += b0 != NBS__EMPTY;
+      got[n] = b1;
+      n += b1 != NBS__EMPTY;
+      got[n] = b2;
+      n += b2 != NBS__EMPTY;
+      got[n] = b3;
+      n += b3 != NBS__EMPTY;
+      b0 = E[b0].X;
+      b1 = E[b1].X;
+      b2 = E[b2].X;
+      b3 = E[b3].X;
+    } while (n <= NBS__NBS_GATHER - 4 && (b0 & b1 & b2 & b3) != NBS__EMPTY);
+    for (int32_t a = c; a != NBS__EMPTY; a = E[a].X) {
+      NBS__TRY(nbs__nbs_pairs(run, K, a, got, n));
     }
   }
   return NBS_OK;
@@ -372,7 +506,7 @@ static inline nbs_status nbs__nbs_check_cell(nbs__run *run, const nbs__nbs_block
  * entry): the caller's in 2D, the layer block's in 3D. */
 static inline nbs_status nbs__nbs_check_row(nbs__run *run, const nbs__nbs_axes *g,
                                             const nbs__nbs_block *K, const double *x, int dim,
-                                            const int32_t *Y, const int32_t *X, int32_t *A0,
+                                            const int32_t *Y, int32_t *X, int32_t *A0,
                                             const int32_t *A1, int32_t row) {
   for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) {
     const int32_t ix = nbs__nbs_cell(g, x, dim, e, 0);
@@ -381,7 +515,11 @@ static inline nbs_status nbs__nbs_check_row(nbs__run *run, const nbs__nbs_axes *
     A0[ix] = nbs__mark(c);
     const int32_t il = nbs__nbs_near(g, ix, -1, 0), ir = nbs__nbs_near(g, ix, 1, 0);
     const int32_t nb[4] = {nbs__unmark(A0[il]), A1[il], A1[ix], A1[ir]};
-    NBS__TRY(nbs__nbs_check_cell(run, K, X, c, nb));
+    if (K) {
+      NBS__TRY(nbs__nbs_check_cell3(run, K, c, nb));
+    } else {
+      NBS__TRY(nbs__nbs_check_cell(run, K, X, c, nb));
+    }
   }
   return NBS_OK;
 }
@@ -408,7 +546,7 @@ static inline nbs_status nbs__nbs_check_row(nbs__run *run, const nbs__nbs_axes *
 #define NBS__NBS_PUSH_X(e, A, R, top, dim)                                                    \
   do {                                                                                        \
     const int32_t nbs__ix = nbs__nbs_cell(g, x, dim, (e), 0);                                 \
-    NBS__NBS_PUSH((e), X[e], A, nbs__ix, R, top);                                             \
+    NBS__NBS_PUSH((e), *nbs__nbs_xlink(Kp, X, (e)), A, nbs__ix, R, top);                      \
   } while (0)
 
 /* Pushes the elements of the y-lists starting at first0 and first1 onto the x-lists of the sets A0
@@ -446,6 +584,7 @@ nbs__nbs_2d_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bo
   int32_t *restrict A1 = L->A1;
   int32_t *restrict Y = L->Y;
   int32_t *restrict X = L->X;
+  const nbs__nbs_block *const Kp = NULL; /* the x-links are X */
   int32_t *restrict RA0 = L->RA0;
   int32_t *restrict RA1 = L->RA1;
 
@@ -502,18 +641,18 @@ static nbs_status nbs__nbs_block_reserve(nbs__run *run, int32_t need, nbs__nbs_b
   nbs_context *ctx = run->ctx;
   const bool radii = run->r != NULL;
   const size_t entry = nbs__nbs_entry_bytes(radii);
-  /* need and the capacity grown from it are at most N */
-  if ((uint64_t)run->n > SIZE_MAX / entry) {
+  /* need and the capacity grown from it are at most N, and the sentinel is one more */
+  if ((uint64_t)run->n + 1 > SIZE_MAX / entry) {
     return nbs__fail(ctx, NBS_ERR_NOMEM, -1,
                      "nbs: a layer block of up to %ld entries cannot be addressed", (long)run->n);
   }
-  size_t bytes = (size_t)need * entry;
+  size_t bytes = ((size_t)need + 1) * entry; /* and the sentinel entry */
   if (bytes > ctx->nbs_block_size) {
     size_t want = bytes;
     if (ctx->nbs_block) {
       int64_t cap = (int64_t)need + need / 8;
       if (cap > run->n) cap = run->n;
-      want = (size_t)cap * entry;
+      want = ((size_t)cap + 1) * entry;
     }
     void *p = nbs__alloc(ctx, want);
     if (!p) {
@@ -526,31 +665,30 @@ static nbs_status nbs__nbs_block_reserve(nbs__run *run, int32_t need, nbs__nbs_b
   }
   /* doubles first, then the int32 arrays: every array is aligned */
   char *w = ctx->nbs_block;
-  K->x = (double *)(void *)w;
-  w += (size_t)need * 3 * sizeof(double);
+  K->e = (nbs__nbs_entry *)(void *)w + 1;
+  w += ((size_t)need + 1) * sizeof(nbs__nbs_entry);
+  K->e[-1].X = NBS__EMPTY;
   K->r = NULL;
   if (radii) {
     K->r = (double *)(void *)w;
     w += (size_t)need * sizeof(double);
   }
-  K->id = (int32_t *)(void *)w;
-  K->Y = K->id + need;
-  K->X = K->Y + need;
+  K->Y = (int32_t *)(void *)w;
   return NBS_OK;
 }
 
-/* Copies element e into the next entry of the block (m) and pushes that entry onto the y-list
+/* Copies element k into the next entry of the block (m) and pushes that entry onto the y-list
  * of its row in the set B (record R, top): steps 3 and 4 for one element. */
-#define NBS__NBS_TAKE(e, B, R, top)                                                           \
+#define NBS__NBS_TAKE(k, l, B, R, top)                                                        \
   do {                                                                                        \
-    const int32_t nbs__l = m++;                                                               \
-    const double *nbs__p = x + (size_t)(e) * 3;                                               \
-    double *nbs__q = K.x + (size_t)nbs__l * 3;                                                \
+    const int32_t nbs__l = (l);                                                               \
+    const double *nbs__p = x + (size_t)(k) * 3;                                               \
+    double *nbs__q = K.e[nbs__l].x;                                                           \
     nbs__q[0] = nbs__p[0];                                                                    \
     nbs__q[1] = nbs__p[1];                                                                    \
     nbs__q[2] = nbs__p[2];                                                                    \
-    if (r) K.r[nbs__l] = r[e];                                                                \
-    K.id[nbs__l] = (e);                                                                       \
+    if (r) K.r[nbs__l] = r[k];                                                                \
+    K.e[nbs__l].id = (k);                                                                     \
     const int32_t nbs__iy = nbs__nbs_at(g, nbs__q, 1);                                        \
     NBS__NBS_PUSH(nbs__l, KY[nbs__l], B, nbs__iy, R, top);                                    \
   } while (0)
@@ -569,9 +707,10 @@ nbs__nbs_3d_layer(nbs__run *run, const nbs__nbs_layout *L, const nbs__nbs_axes *
   const int32_t *restrict RB1 = L->RB1;
   int32_t *restrict RA0 = L->RA0;
   int32_t *restrict RA1 = L->RA1;
-  const double *x = K->x; /* the coordinates the lists' entries refer to */
+  const double *x = K->e[0].x; /* the coordinates the lists' entries refer to */
+  const nbs__nbs_block *const Kp = K;
   const int32_t *restrict Y = K->Y;
-  int32_t *restrict X = K->X;
+  int32_t *X = NULL; /* the x-links are in the block's entries */
 
   /* Step 5: loop over the central layer; the first element in a "new" row (iy,iz) makes it
    * the central row. Those first elements, in the order of the layer, are the ones step 3
@@ -589,14 +728,14 @@ nbs__nbs_3d_layer(nbs__run *run, const nbs__nbs_layout *L, const nbs__nbs_axes *
     /* Step 6: the elements of the central row onto the x-lists of set 0; step 7: the
      * elements of the neighbouring rows onto the x-lists of set 1. */
     int32_t na0 = 0, na1 = 0;
-    for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) NBS__NBS_PUSH_X(e, A0, RA0, na0, 3);
+    for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) NBS__NBS_PUSH_X(e, A0, RA0, na0, NBS__NBS_STRIDE);
     for (int l = 0; l < 4; l++) {
-      for (int32_t e = nrow[l]; e != NBS__EMPTY; e = Y[e]) NBS__NBS_PUSH_X(e, A1, RA1, na1, 3);
+      for (int32_t e = nrow[l]; e != NBS__EMPTY; e = Y[e]) NBS__NBS_PUSH_X(e, A1, RA1, na1, NBS__NBS_STRIDE);
     }
 
     /* Step 8: loop over the central row; the first element in a "new" cell (ix,iy,iz)
      * makes it the central cell: mark it and check it with the 13-cell mask (eq. 3.73). */
-    NBS__TRY(nbs__nbs_check_row(run, g, K, x, 3, Y, X, A0, A1, row));
+    NBS__TRY(nbs__nbs_check_row(run, g, K, x, NBS__NBS_STRIDE, Y, X, A0, A1, row));
 
     /* Steps 9 and 10: remove the x-lists of the central and of the neighbouring rows,
      * resetting the heads they started. */
@@ -618,6 +757,7 @@ nbs__nbs_3d_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bo
   const double *r = run->r;
   const int32_t n = run->n;
   int32_t *restrict C = L->C;
+  const int32_t ways = L->zways;
   int32_t *restrict CN = L->CN;
   int32_t *restrict B0 = L->B0;
   int32_t *restrict B1 = L->B1;
@@ -625,12 +765,14 @@ nbs__nbs_3d_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bo
   int32_t *restrict RB0 = L->RB0;
   int32_t *restrict RB1 = L->RB1;
 
-  /* Step 1: map every element onto its z-list (layer): Z[k] = C[iz]; C[iz] = k. All
-   * z-lists are "new" (unmarked). CN[iz] counts the layer's elements. */
+  /* Step 1: map every element onto its z-list (layer): Z[k] = C[iz]; C[iz] = k, the
+   * layer's list k mod w of its w. All layers are "new" (CN[iz] >= 0): CN[iz] counts the
+   * layer's elements. */
   for (int32_t k = 0; k < n; k++) {
     const int32_t iz = nbs__nbs_cell(g, x, 3, k, 2);
-    Z[k] = C[iz];
-    C[iz] = k;
+    int32_t *h = &C[ways * iz + (k & (ways - 1))];
+    Z[k] = *h;
+    *h = k;
     CN[iz]++;
   }
 
@@ -646,41 +788,90 @@ nbs__nbs_3d_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bo
   int32_t *restrict KY = K.Y;
 
   /* Step 2: loop over the elements; the first one in a "new" z-list makes it the central
-   * layer. */
+   * layer. Then the layer above it, if it is new and not empty, is the next central layer,
+   * and so on up (see "chains of layers" in the file comment): its neighbouring layer is
+   * the one just done, already in the block. */
+  const int32_t cap = need; /* the block, used as a ring */
   for (int32_t k = 0; k < n; k++) {
-    const int32_t iz = nbs__nbs_cell(g, x, 3, k, 2);
-    if (nbs__is_marked(C[iz])) continue;
-    const int32_t layer = C[iz];
-    C[iz] = nbs__mark(layer); /* mark the layer "old" */
-    /* Layer iz-1 may have been central already: read its head unmarked. */
-    const int32_t under = nbs__unmark(C[nbs__nbs_near(g, iz, -1, 2)]);
+    int32_t iz = nbs__nbs_cell(g, x, 3, k, 2);
+    if (CN[iz] < 0) continue;
+    CN[iz] = -1; /* mark the layer "old" */
+    const int32_t iu = nbs__nbs_near(g, iz, -1, 2);
+    int32_t e[NBS__NBS_ZWAYS], u[NBS__NBS_ZWAYS];
+    for (int w = 0; w < ways; w++) {
+      e[w] = C[ways * iz + w];
+      u[w] = C[ways * iu + w];
+    }
 
     /* Step 3: the elements of the central layer onto the y-lists of set 0; step 4: the
      * elements of the neighbouring layer iz-1 onto the y-lists of set 1; each copied into
-     * the block on the way, the y-lists linking its entries. The two walks go side by side,
-     * so that their cache misses overlap; each list still gets its elements in the book's
-     * order. RB0 records the rows of the central layer in the order in which this walk
-     * meets their first element. */
-    int32_t m = 0, nb0 = 0, nb1 = 0;
-    int32_t e0 = layer, e1 = under;
-    while (e0 != NBS__EMPTY && e1 != NBS__EMPTY) {
-      const int32_t n0 = Z[e0], n1 = Z[e1];
-      NBS__NBS_TAKE(e0, B0, RB0, nb0);
-      NBS__NBS_TAKE(e1, B1, RB1, nb1);
-      e0 = n0;
-      e1 = n1;
+     * the block on the way, the y-lists linking its entries: the central layer's from entry
+     * 0 up, the other's from the last entry down. The walks go side by side, so that their
+     * cache misses overlap. RB0 records the rows of the central layer in the order in which
+     * this walk meets their first element. */
+    int32_t m = 0, mu = cap - 1, nb0 = 0, nb1 = 0;
+    for (bool more = true; more;) {
+      more = false;
+      for (int w = 0; w < ways; w++) {
+        if (e[w] != NBS__EMPTY) {
+          const int32_t next = Z[e[w]];
+          NBS__NBS_TAKE(e[w], m++, B0, RB0, nb0);
+          e[w] = next;
+          more = true;
+        }
+        if (u[w] != NBS__EMPTY) {
+          const int32_t next = Z[u[w]];
+          NBS__NBS_TAKE(u[w], mu--, B1, RB1, nb1);
+          u[w] = next;
+          more = true;
+        }
+      }
     }
-    for (; e0 != NBS__EMPTY; e0 = Z[e0]) NBS__NBS_TAKE(e0, B0, RB0, nb0);
-    for (; e1 != NBS__EMPTY; e1 = Z[e1]) NBS__NBS_TAKE(e1, B1, RB1, nb1);
-
     /* Steps 5-11 over the block. */
     NBS__NBS_TRY(nbs__nbs_3d_layer(run, L, g, &K, nb0, nb1));
+
+    /* The central layer's entries are the ring's [s, s + len) (mod cap). */
+    int32_t s = 0, len = m;
+    for (;;) {
+      const int32_t iv = nbs__nbs_near(g, iz, 1, 2);
+      if (CN[iv] <= 0) break; /* empty or old: the chain ends */
+      iz = iv;
+      CN[iz] = -1; /* mark the layer "old" */
+      nb0 = nb1 = 0;
+      /* Step 4 for the layer just done, now the neighbouring one: its entries onto the
+       * y-lists of set 1, in the order they were taken. */
+      for (int32_t i = 0, l = s; i < len; i++) {
+        const int32_t iy = nbs__nbs_at(g, K.e[l].x, 1);
+        NBS__NBS_PUSH(l, KY[l], B1, iy, RB1, nb1);
+        l = l + 1 == cap ? 0 : l + 1;
+      }
+      /* Step 3: the new central layer's elements into the ring after them. */
+      s = s + len;
+      s = s >= cap ? s - cap : s;
+      m = s;
+      len = 0;
+      for (int w = 0; w < ways; w++) e[w] = C[ways * iz + w];
+      for (bool more = true; more;) {
+        more = false;
+        for (int w = 0; w < ways; w++) {
+          if (e[w] != NBS__EMPTY) {
+            const int32_t next = Z[e[w]];
+            NBS__NBS_TAKE(e[w], m, B0, RB0, nb0);
+            m = m + 1 == cap ? 0 : m + 1;
+            len++;
+            e[w] = next;
+            more = true;
+          }
+        }
+      }
+      NBS__NBS_TRY(nbs__nbs_3d_layer(run, L, g, &K, nb0, nb1));
+    }
   }
 
   /* Finally remove the z-lists (and their counts), by a loop over the elements. */
   for (int32_t k = 0; k < n; k++) {
     const int32_t iz = nbs__nbs_cell(g, x, 3, k, 2);
-    C[iz] = NBS__EMPTY;
+    C[ways * iz + (k & (ways - 1))] = NBS__EMPTY;
     CN[iz] = 0;
   }
   return NBS_OK;
