@@ -396,8 +396,9 @@ static inline nbs_status nbs__nbs_pair(nbs__run *run, const nbs__nbs_block *K, i
   const nbs__nbs_entry *ea = &K->e[a], *eb = &K->e[b];
   if (run->mode == NBS_MODE_CONTACTS) {
     const bool r = K->r != NULL;
-    if (run->count == run->cap) NBS__TRY(nbs__flush(run));
     const bool t = nbs__touch_at(ea->x, eb->x, 3, r, r ? K->r[a] : 0, r ? K->r[b] : 0, run->d2);
+    /* a full buffer is flushed (or found at max_pairs) only for a pair that touches */
+    if (run->count == run->cap) return t ? nbs__emit(run, ea->id, eb->id) : NBS_OK;
     const int32_t ia = ea->id, ib = eb->id;
     nbs_pair p;
     p.i = ia < ib ? ia : ib;

@@ -485,6 +485,55 @@ static void test_callback_small_max_pairs(void) {
   scene_free(&s);
 }
 
+/* A max_pairs of exactly the scene's contacts is enough: every algorithm delivers them all,
+ * whatever candidates come after the buffer is full (it may be flushed, or found at the
+ * limit, only for a pair that touches). One fewer is NBS_ERR_PAIRS. 2D and 3D, crowded, and
+ * a scene of one contact followed by a candidate that does not touch (max_pairs 1). */
+static void test_max_pairs_exact(void) {
+  for (int c = 0; c < 4; c++) {
+    const int dim = 2 + c % 2;
+    scene s;
+    if (c < 2) {
+      s = test_scene(SCENE_UNIFORM, dim, 3000, 0.5);
+    } else {
+      /* a pair that touches in one cell, and in the cells on either side of it one
+       * element each that touches neither: whichever cell is checked first, the pair
+       * that touches is followed by candidates that do not */
+      s = new_scene(dim, 4, 1.0, false);
+      const double at[4] = {0.0, 0.9, -1.05, 1.95};
+      for (int k = 0; k < 4; k++) s.coords[k * dim] = at[k];
+    }
+    nbs_input in = scene_input(&s);
+    nbs_context *ref;
+    ASSERT_OK(nbs_context_create(NULL, &ref));
+    nbs_detect_def def = nbs_default_detect_def();
+    def.algorithm = NBS_DIRECT;
+    ASSERT_OK(nbs_detect(ref, &in, &def));
+    size_t contacts = 0;
+    nbs_pairs(ref, &contacts);
+    CHECK_TRUE(c < 2 ? contacts > 100 : contacts == 1);
+    for (size_t extra = 0; extra < (contacts > 1 ? 2 : 1); extra++) { /* max_pairs 0: none */
+      nbs_context_def cdef = nbs_default_context_def();
+      cdef.max_pairs = contacts - extra;
+      for (int a = 0; a < NBS_ALGORITHM_COUNT; a++) {
+        nbs_context *ctx;
+        ASSERT_OK(nbs_context_create(&cdef, &ctx));
+        def.algorithm = (nbs_algorithm)a;
+        const nbs_status st = nbs_detect(ctx, &in, &def);
+        CHECK_MSG(st == (extra ? NBS_ERR_PAIRS : NBS_OK), "%dD %s, max_pairs %zu of %zu: %s",
+                  dim, nbs_algorithm_name((nbs_algorithm)a), cdef.max_pairs, contacts,
+                  nbs_status_name(st));
+        size_t count = 0;
+        nbs_pairs(ctx, &count);
+        CHECK_EQ(count, extra ? 0 : contacts);
+        nbs_context_destroy(ctx);
+      }
+    }
+    nbs_context_destroy(ref);
+    scene_free(&s);
+  }
+}
+
 /* ---- sizes ------------------------------------------------------------------------------ */
 
 /* Radii from 0.5 down to 5e-7 (ratio 1e6): small elements in touching rows, some touching the large ones at exactly rl + rs, large ones touching each
@@ -791,6 +840,7 @@ int main(int argc, char **argv) {
       {"near_max_double", test_near_max_double},
       {"one_point", test_one_point},
       {"callback_small_max_pairs", test_callback_small_max_pairs},
+      {"max_pairs_exact", test_max_pairs_exact},
       {"radius_ratio", test_radius_ratio},
       {"denormal_diameters", test_denormal_diameters},
       {"huge_radii", test_huge_radii},
