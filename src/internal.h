@@ -240,7 +240,7 @@ nbs_status nbs__nbs(nbs__run *run);
  * is folded. */
 bool nbs__nbs_fold(const nbs__run *run, int64_t lists[3]);
 /* The lists NBS keeps each layer's z-list as, for nz layers and n elements (capacities):
- * a power of two from 1 to 8, as many as keep their heads within n / 16. Element k is on
+ * a power of two from 1 to 8, as many as keep their heads within n / 64. Element k is on
  * list k mod ways of its layer; the walks of steps 3 and 4 go down them side by side. */
 int nbs__nbs_zways(int64_t nz, int64_t n);
 nbs_status nbs__cellsort(nbs__run *run);

@@ -22,9 +22,9 @@
  * built it touched. Time is therefore proportional to N whatever the packing density and the
  * extent of the domain (eqs. 3.63-3.64), and memory is ny + 2nx + 2N integers in 2D
  * (eq. 3.65). In 3D it is w nz + 2ny + 2nx + N integers (w <= 8 z-lists per layer, with
- * w nz <= N / 16) and a layer block of M <= N entries of 36 bytes (below) where eq. 3.80
+ * w nz <= N / 64) and a layer block of M <= N entries of 36 bytes (below) where eq. 3.80
  * has nz + 2ny + 2nx + 3N integers, plus, in both, the records described below (2nx in 2D,
- * 2nx + 2ny in 3D) and in 3D nz layer counts.
+ * nz + 2ny + 2nx in 3D) and in 3D nz layer counts.
  *
  * Deviations from the book's text, all of them representation only:
  *  - 0-based element indices, and the end of a list is NBS__EMPTY (-1);
@@ -34,20 +34,24 @@
  *    would overflow int32 for large N; a marked head read as a neighbour goes through
  *    nbs__unmark. Lists of set 1 are never marked. A layer (3D), whose z-list is w heads,
  *    is marked in its count instead: CN[iz] = -1 once its elements are counted (step 2);
- *  - records of started heads (RB0, RB1 of at most ny entries, RA0, RA1 of at most nx): a
- *    push that starts a list (its head was empty) also notes the head's index. The removal
- *    of a set of lists (3D steps 9, 10, 11; the 2D removal of x-lists) resets the heads its
- *    record names instead of walking the lists a second time to recompute them (the same
- *    heads: exactly those the elements touched). In 3D, step 5's loop over the central
- *    layer, which finds each row "new" at its first element in layer order, runs over RB0:
- *    step 3 walks the same layer in the same order and notes each row at the same first
- *    element, so the central rows come in the book's order without a second walk of the
- *    layer (the rows are still found by the loop over the elements of the layer, step 3's);
+ *  - records of started heads (RB0, RB1 of at most ny entries, RA0, RA1 of at most nx, RC
+ *    of at most nz): a push that starts a list (its head was empty) also notes the head's
+ *    index. The removal of a set of lists (3D steps 9, 10, 11 and the z-lists; the 2D
+ *    removal of x-lists) resets the heads its record names instead of walking the lists or
+ *    the elements a second time to recompute them (the same heads: exactly those the
+ *    elements touched). In 3D, step 5's loop over the central layer, which finds each row
+ *    "new" at its first element in layer order, runs over RB0: step 3 walks the same layer
+ *    in the same order and notes each row at the same first element, so the central rows
+ *    come in the book's order without a second walk of the layer (the rows are still found
+ *    by the loop over the elements of the layer, step 3's). Likewise step 2's loop over the
+ *    elements runs over RC, the layers in the order step 1 met their first elements, and
+ *    so does the pass that sizes the layer block: one pass over the coordinates (step 1)
+ *    where there were four;
  *  - walks of independent lists go side by side (2D: the central row and the row below it;
  *    3D: steps 3 and 4, and the four neighbour lists of a central cell). In random element
  *    order every step of a list is a cache miss; walked side by side the misses overlap;
  *  - 3D: a layer's z-list is kept as w lists (nbs__nbs_zways: 8 where their heads stay
- *    within N / 16 ints, fewer where there are many layers), element k on list k mod w, so
+ *    within N / 64 ints, fewer where there are many layers), element k on list k mod w, so
  *    that steps 3 and 4 walk 8 lists side by side where the book's one list would be walked
  *    a cache miss at a time. The layer's elements are the union of its lists; only the
  *    order in which the y-lists receive them changes, and with it the order of the pairs;
@@ -70,7 +74,9 @@
  *    z-lists again, and only the new central layer is walked, into the entries after them
  *    (the block is a ring; the two layers never hold more than M entries together). In
  *    random element order the walks of steps 3-4 are the misses that remain, and this
- *    halves them: a uniform scene is one or two chains;
+ *    halves them: a uniform scene is one or two chains. Rows chain the same way in step 5:
+ *    after a central row, the row above it, if new and not empty, so that the rows two
+ *    central rows share are still in the core's cache (at N = 1e7 a layer block is 3 MB);
  *  - 3D: the candidates of a central cell. The four neighbour lists are walked side by side
  *    (an entry before the block's first, its sentinel, links to NBS__EMPTY, so that an
  *    ended walk stays ended without a branch); the entries met are gathered, and each
@@ -130,10 +136,10 @@
  *
  * The work block (ctx->work, work_kind NBS__WORK_NBS) holds, as int32:
  *   [ C: w(nz+2) ] [ B0: ny+2 ] [ B1: ny+2 ] [ A0: nx+2 ] [ A1: nx+2 ] [ CN: nz+2 ]
- *   [ RB0: ny+1 ] [ RB1: ny+1 ] [ RA0: nx+1 ] [ RA1: nx+1 ] [ Z: N ]
+ *   [ RC: nz+1 ] [ RB0: ny+1 ] [ RB1: ny+1 ] [ RA0: nx+1 ] [ RA1: nx+1 ] [ Z: N ]
  * in 3D, and in 2D
  *   [ B: ny+2 ] [ A0: nx+2 ] [ A1: nx+2 ] [ RA0: nx+1 ] [ RA1: nx+1 ] [ Y: N ] [ X: N ]
- * that is 4 (N + (w + 1) nz + 4ny + 4nx + 14 + 2w) bytes in 3D (w = nbs__nbs_zways(nz, N))
+ * that is 4 (N + (w + 2) nz + 4ny + 4nx + 15 + 2w) bytes in 3D (w = nbs__nbs_zways(nz, N))
  * and 4 (2N + ny + 4nx + 8) in 2D: eqs. 3.80 (without Y and X) and 3.65, the records, the
  * counts and the padding (a record has one spare entry, written and not counted by a push
  * that starts no list). nx, ny, nz, N here
@@ -165,7 +171,7 @@
 
 int nbs__nbs_zways(int64_t nz, int64_t n) {
   int w = NBS__NBS_ZWAYS;
-  while (w > 1 && (int64_t)w * (nz + 2) > n / 16) w /= 2;
+  while (w > 1 && (int64_t)w * (nz + 2) > n / 64) w /= 2;
   return w;
 }
 
@@ -180,8 +186,9 @@ typedef struct nbs__nbs_layout {
   int32_t *CN;        /* number of elements of each z-list (3D only; see the layer block) */
   int32_t *Z, *Y, *X; /* next arrays: Z in 3D only, Y and X in 2D only */
   /* The heads each set's lists were started at, in the order they were started: at most
-   * ny (RB0, RB1; 3D only) and nx (RA0, RA1) entries. */
-  int32_t *RB0, *RB1, *RA0, *RA1;
+   * ny (RB0, RB1; 3D only) and nx (RA0, RA1) entries; RC (3D only), the layers in the
+   * order step 1 met their first element, at most nz. */
+  int32_t *RC, *RB0, *RB1, *RA0, *RA1;
 } nbs__nbs_layout;
 
 /* Number of heads for capacities cap[] = {nx, ny, nz (0 in 2D), N}, padding included. */
@@ -196,11 +203,11 @@ static int64_t nbs__nbs_head_count(int dim, const int64_t cap[4]) {
   return h;
 }
 
-/* Number of entries of the started-heads records: 2 (nx + 1), and 2 (ny + 1) in 3D (each
- * record has room for one entry more than the heads it can name, written and not counted by
- * a push that starts no list). */
+/* Number of entries of the started-heads records: 2 (nx + 1), and 2 (ny + 1) + nz + 1 in
+ * 3D (each record has room for one entry more than the heads it can name, written and not
+ * counted by a push that starts no list). */
 static int64_t nbs__nbs_record_count(int dim, const int64_t cap[4]) {
-  return 2 * (cap[0] + 1) + (dim == 3 ? 2 * (cap[1] + 1) : 0);
+  return 2 * (cap[0] + 1) + (dim == 3 ? 2 * (cap[1] + 1) + cap[2] + 1 : 0);
 }
 
 /* Number of layer counts CN (3D: nz + 2, padded like C; none in 2D). */
@@ -251,12 +258,14 @@ static void nbs__nbs_layout_at(nbs__nbs_layout *L, void *work, int dim, const in
   L->CN = dim == 3 ? w : NULL;
   w += nbs__nbs_count_count(dim, cap);
   if (dim == 3) {
+    L->RC = w;
+    w += cap[2] + 1;
     L->RB0 = w;
     w += cap[1] + 1;
     L->RB1 = w;
     w += cap[1] + 1;
   } else {
-    L->RB0 = L->RB1 = NULL;
+    L->RC = L->RB0 = L->RB1 = NULL;
   }
   L->RA0 = w;
   w += cap[0] + 1;
@@ -718,7 +727,9 @@ nbs__nbs_3d_layer(nbs__run *run, const nbs__nbs_layout *L, const nbs__nbs_axes *
    * met first in their rows: RB0 lists their rows in that order, so the loop runs over RB0
    * instead of walking the layer a second time. */
   for (int32_t i = 0; i < nb0; i++) {
-    const int32_t iy = RB0[i];
+    int32_t iy = RB0[i];
+    if (nbs__is_marked(B0[iy])) continue; /* central already, in a chain of rows */
+  for (;;) {
     const int32_t row = B0[iy];
     B0[iy] = nbs__mark(row); /* mark the row "old" */
     /* The neighbouring rows of eq. 3.79: (iy-1,iz) may have been central already (read
@@ -742,6 +753,13 @@ nbs__nbs_3d_layer(nbs__run *run, const nbs__nbs_layout *L, const nbs__nbs_axes *
      * resetting the heads they started. */
     nbs__nbs_clear(A0, RA0, na0);
     nbs__nbs_clear(A1, RA1, na1);
+
+    /* Chains of rows: the row above, if it is new and not empty, is central next, while
+     * the rows it shares with this one are still in the core's cache. */
+    const int32_t up = nbs__nbs_near(g, iy, 1, 1);
+    if (B0[up] < 0) break; /* empty (EMPTY) or old (marked) */
+    iy = up;
+  }
   }
 
   /* Step 11: remove the y-lists of the central layer and of layer iz-1. */
@@ -765,22 +783,25 @@ nbs__nbs_3d_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bo
   int32_t *restrict Z = L->Z;
   int32_t *restrict RB0 = L->RB0;
   int32_t *restrict RB1 = L->RB1;
+  int32_t *restrict RC = L->RC;
 
   /* Step 1: map every element onto its z-list (layer): Z[k] = C[iz]; C[iz] = k, the
    * layer's list k mod w of its w. All layers are "new" (CN[iz] >= 0): CN[iz] counts the
    * layer's elements. */
+  int32_t nc = 0; /* RC[0..nc-1]: the layers, in the order of their first elements */
   for (int32_t k = 0; k < n; k++) {
     const int32_t iz = nbs__nbs_cell(g, x, 3, k, 2);
     int32_t *h = &C[ways * iz + (k & (ways - 1))];
     Z[k] = *h;
     *h = k;
-    CN[iz]++;
+    RC[nc] = iz;
+    nc += CN[iz]++ == 0;
   }
 
   /* The layer block: as many entries as the largest layer and the one below it hold. */
   int32_t need = 1;
-  for (int32_t k = 0; k < n; k++) {
-    const int32_t iz = nbs__nbs_cell(g, x, 3, k, 2);
+  for (int32_t i = 0; i < nc; i++) {
+    const int32_t iz = RC[i];
     const int32_t t = CN[iz] + CN[nbs__nbs_near(g, iz, -1, 2)];
     need = t > need ? t : need;
   }
@@ -789,12 +810,14 @@ nbs__nbs_3d_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bo
   int32_t *restrict KY = K.Y;
 
   /* Step 2: loop over the elements; the first one in a "new" z-list makes it the central
-   * layer. Then the layer above it, if it is new and not empty, is the next central layer,
-   * and so on up (see "chains of layers" in the file comment): its neighbouring layer is
-   * the one just done, already in the block. */
+   * layer. The first elements of the layers, in the order of the elements, are those step 1
+   * noted in RC, so the loop runs over RC (as step 5 runs over RB0). Then the layer above
+   * it, if it is new and not empty, is the next central layer, and so on up (see "chains of
+   * layers" in the file comment): its neighbouring layer is the one just done, already in
+   * the block. */
   const int32_t cap = need; /* the block, used as a ring */
-  for (int32_t k = 0; k < n; k++) {
-    int32_t iz = nbs__nbs_cell(g, x, 3, k, 2);
+  for (int32_t i = 0; i < nc; i++) {
+    int32_t iz = RC[i];
     if (CN[iz] < 0) continue;
     CN[iz] = -1; /* mark the layer "old" */
     const int32_t iu = nbs__nbs_near(g, iz, -1, 2);
@@ -841,7 +864,7 @@ nbs__nbs_3d_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bo
       nb0 = nb1 = 0;
       /* Step 4 for the layer just done, now the neighbouring one: its entries onto the
        * y-lists of set 1, in the order they were taken. */
-      for (int32_t i = 0, l = s; i < len; i++) {
+      for (int32_t j = 0, l = s; j < len; j++) {
         const int32_t iy = nbs__nbs_at(g, K.e[l].x, 1);
         NBS__NBS_PUSH(l, KY[l], B1, iy, RB1, nb1);
         l = l + 1 == cap ? 0 : l + 1;
@@ -869,10 +892,11 @@ nbs__nbs_3d_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bo
     }
   }
 
-  /* Finally remove the z-lists (and their counts), by a loop over the elements. */
-  for (int32_t k = 0; k < n; k++) {
-    const int32_t iz = nbs__nbs_cell(g, x, 3, k, 2);
-    C[ways * iz + (k & (ways - 1))] = NBS__EMPTY;
+  /* Finally remove the z-lists (and their counts): reset the heads of the layers step 1
+   * noted. */
+  for (int32_t i = 0; i < nc; i++) {
+    const int32_t iz = RC[i];
+    for (int w = 0; w < ways; w++) C[ways * iz + w] = NBS__EMPTY;
     CN[iz] = 0;
   }
   return NBS_OK;

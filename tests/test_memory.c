@@ -42,7 +42,7 @@ static int64_t nbs_block_entries(nbs_context *ctx, const nbs_input *in) {
 /* NBS: 2D ny + 2nx + 2N integers (eq. 3.65) plus the records of the heads each set of lists
  * started (2nx); 3D nz + 2ny + 2nx + N integers (eq. 3.80 without the y- and x-links, which
  * are in the layer block), with up to 8 z-lists per layer instead of one (nbs__nbs_zways),
- * plus nz layer counts and the records (2ny + 2nx), plus the layer block of 36 bytes per
+ * plus nz layer counts and the records (nz + 2ny + 2nx), plus the layer block of 36 bytes per
  * entry and its sentinel entry (see src/munjiza_nbs.c). The padding cells on each side of
  * each head array and the spare entry of each record are the fixed overhead. */
 static void test_nbs_formula(void) {
@@ -61,7 +61,7 @@ static void test_nbs_formula(void) {
         nbs_input in = scene_input(&s);
         const int64_t ways = dim == 3 ? nbs__nbs_zways(st.cells[2], n) : 0;
         int64_t ints = dim == 2 ? st.cells[1] + 2 * st.cells[0] + 2 * n + 2 * st.cells[0]
-                                : (ways + 1) * st.cells[2] + 2 * st.cells[1] + 2 * st.cells[0] +
+                                : (ways + 2) * st.cells[2] + 2 * st.cells[1] + 2 * st.cells[0] +
                                       n + 2 * st.cells[1] + 2 * st.cells[0];
         int64_t formula = ints * 4;
         if (dim == 3) formula += (nbs_block_entries(ctx, &in) + 1) * (in.radii ? 44 : 36);
@@ -71,15 +71,15 @@ static void test_nbs_formula(void) {
                   dim, scene_kind_name(kinds[f]), (long long)n, fractions[f], st.work_bytes,
                   (long long)formula);
         /* NBS folds where the book's heads and records (with their padding: 8 ints in 2D,
-         * 14 and two per z-list of a layer in 3D) would take more ints than half the
+         * 15 and two per z-list of a layer in 3D) would take more ints than half the
          * elements: the far elements of sparse and clustered scenes, uniform scenes at the
          * thinner fractions; never a crowded uniform scene (f = 0) */
         const nbs__run run = prepared_run(ctx, &in);
         const int64_t *cells = run.grid.n;
         const int64_t zw = dim == 3 ? nbs__nbs_zways(cells[2], n) : 0;
         const int64_t book = dim == 2 ? 5 * cells[0] + cells[1]
-                                      : (zw + 1) * cells[2] + 4 * cells[1] + 4 * cells[0];
-        const int64_t pad = dim == 2 ? 8 : 14 + 2 * zw;
+                                      : (zw + 2) * cells[2] + 4 * cells[1] + 4 * cells[0];
+        const int64_t pad = dim == 2 ? 8 : 15 + 2 * zw;
         CHECK_MSG(st.compressed == (f >= 3 || (f > 0 && 2 * (book + pad) > n)),
                   "%dD %s n=%lld fraction %g: folded %d", dim, scene_kind_name(kinds[f]),
                   (long long)n, fractions[f], st.compressed);
