@@ -8,8 +8,8 @@
  * with the number of cells) NBS keeps one level of singly connected lists per axis, built and
  * torn down per detection:
  *
- *   2D:  y-lists B[ny] + Y[N]            one list per row of cells
- *        x-lists A[2][nx] + X[N]         one list per cell of the central row (set 0) and of
+ *   2D:  y-lists B[ny] + Y[N]            one list per row of cells (kept as up to 8, below)
+ *        x-lists A[2][nx] + X[M]         one list per cell of the central row (set 0) and of
  *                                        the row below it (set 1)
  *   3D:  z-lists C[nz] + Z[N]            one list per layer (kept as up to 8, below)
  *        y-lists B[2][ny] + Y[M]         rows of the central layer (set 0), of the layer
@@ -61,8 +61,7 @@
  *    (nbs__nbs_block, below, says why). The lists hold the same elements in the same order;
  *    the pairs are stored under the elements' numbers. The block has as many entries M as
  *    the largest layer and the one below it hold together: step 1 counts each layer's
- *    elements (CN[nz]), and a pass over the elements takes the largest sum before step 2.
- *    An entry is 32 bytes, coordinates, x-link and number together, so that a candidate
+ *    elements (CN[nz]), and the largest sum is taken before step 2. An entry is 32 bytes, coordinates, x-link and number together, so that a candidate
  *    costs one cache line, not three;
  *  - 3D: chains of layers. Step 2 makes the layer of the first element of a new z-list
  *    central, as the book says; when steps 5-11 are done with it, the layer above it, if
@@ -77,7 +76,14 @@
  *    halves them: a uniform scene is one or two chains. Rows chain the same way in step 5:
  *    after a central row, the row above it, if new and not empty, so that the rows two
  *    central rows share are still in the core's cache (at N = 1e7 a layer block is 3 MB);
- *  - 3D: the candidates of a central cell. The four neighbour lists are walked side by side
+ *  - 2D, the same representation one level down: the y-lists are kept as w lists per row
+ *    and counted (CN[ny], RC), the central row and the row below it are copied into a
+ *    block as they are walked, straight onto the x-lists of sets 0 and 1 (whose links are
+ *    the entries'; no X[N]), the central row is the ring's range it was copied to, and
+ *    rows chain upwards as layers do. Memory: ny + 2nx + N ints and the block, where eq.
+ *    3.65 has 2N; measured (N = 1e6, random order, interleaved, min of 3) 123 -> 66 ns per
+ *    element, sorted 57 -> 44, work bytes 8.03 -> 4.13 MB;
+ *  - both: the candidates of a central cell. The four neighbour lists are walked side by side
  *    (an entry before the block's first, its sentinel, links to NBS__EMPTY, so that an
  *    ended walk stays ended without a branch); the entries met are gathered, and each
  *    element of the cell is tested against them in a loop that stores every pair and keeps
@@ -104,19 +110,22 @@
  *  - where those cells are still more than a budget, the elements are sparse or spread
  *    thin, and x and y (in 3D; in 2D both) are scaled down to about the budget: 1.5 N
  *    cells in 2D (about the cells of N elements crowded at fraction 0.5, so the heads take
- *    no more than theirs and a list holds about as many elements; rounded down), 64 N in
- *    3D (where the links and the layer block outweigh the heads; rounded up);
+ *    no more than theirs and a list holds about as many elements; y rounded up, so that
+ *    rows are not overlaid more than scaling asks (their two fullest neighbours size the
+ *    block), and x down by as much more: a single scaled axis is rounded down), 64 N in 3D
+ *    (where the links and the layer block outweigh the heads; rounded up);
  *  - scaling overlays cells far apart, which could pile elements onto a few lists where
  *    they are not spread (a sheet, a lattice of the lists' period): the scaled axes are
  *    doubled until the sample's pairs that share a list estimate no more than twice the
  *    grid's own crowding plus 4 elements per list.
  * An unfolded grid runs a copy of the steps compiled without the folding arithmetic
- * (nbs__nbs_axes.fold is a constant in each). Measured (N = 1e6, bench scenes, work bytes
- * against a crowded uniform scene's 4.72 MB in 3D and 8.03 MB in 2D): 3D sparse 84.2 ->
- * 4.18 MB, clustered 8.78 -> 4.73, huge 4.41 (not folded); 2D sparse 48.2 -> 8.02, clustered
- * 33.1 -> 8.02, huge 28.0 -> 8.02. The price is in 2D sparse scenes, whose lists now hold
- * as many elements as crowded ones: as fast as a crowded scene, where the unfolded lists of
- * a sparse one were about twice as fast.
+ * (nbs__nbs_axes.fold is a constant in each). Measured when folding came (N = 1e6, bench
+ * scenes, work bytes against a crowded uniform scene's 4.72 MB in 3D and 8.03 MB in 2D): 3D
+ * sparse 84.2 -> 4.18 MB, clustered 8.78 -> 4.73, huge 4.41 (not folded); 2D sparse 48.2 ->
+ * 8.02, clustered 33.1 -> 8.02, huge 28.0 -> 8.02. The price is in 2D sparse scenes, whose
+ * lists now hold as many elements as crowded ones: as fast as a crowded scene, where the
+ * unfolded lists of a sparse one were about twice as fast. (With 2D's block, below, the
+ * crowded 2D scene holds 4.13 MB, and sparse, clustered, huge 4.10, 4.12, 4.10.)
  *
  * Measured on the 2-core AMD EPYC of bench/README.md, N = 1e6, fraction 0.5, random order,
  * one thread, before and after the deviations that are about speed, back to back: 3D 548 ->
@@ -178,42 +187,38 @@ int nbs__nbs_zways(int64_t nz, int64_t n) {
 typedef struct nbs__nbs_layout {
   size_t bytes;       /* heads and next arrays */
   int32_t *C;         /* z-list heads (3D only): zways per layer */
-  int32_t zways;      /* the lists a layer's z-list is kept as (nbs__nbs_zways) */
-  int32_t *B0;        /* y-list heads; in 2D the only set */
+  int32_t zways;      /* the lists a layer's z-list (a row's y-list in 2D) is kept as */
+  int32_t *B0;        /* y-list heads; in 2D the only set, zways per row */
   int32_t *B1;        /* y-list heads of the layer below the central one (3D only) */
   int32_t *A0;        /* x-list heads of the central row */
   int32_t *A1;        /* x-list heads of the neighbouring rows */
-  int32_t *CN;        /* number of elements of each z-list (3D only; see the layer block) */
-  int32_t *Z, *Y, *X; /* next arrays: Z in 3D only, Y and X in 2D only */
+  int32_t *CN;        /* number of elements of each z-list (2D: y-list; see the block) */
+  int32_t *Z, *Y;     /* next arrays of the elements: Z in 3D, Y in 2D */
   /* The heads each set's lists were started at, in the order they were started: at most
-   * ny (RB0, RB1; 3D only) and nx (RA0, RA1) entries; RC (3D only), the layers in the
-   * order step 1 met their first element, at most nz. */
+   * ny (RB0, RB1; 3D only) and nx (RA0, RA1) entries; RC, the layers (2D: rows) in the
+   * order step 1 met their first element, at most nz (ny). */
   int32_t *RC, *RB0, *RB1, *RA0, *RA1;
 } nbs__nbs_layout;
 
 /* Number of heads for capacities cap[] = {nx, ny, nz (0 in 2D), N}, padding included. */
 static int64_t nbs__nbs_head_count(int dim, const int64_t cap[4]) {
   int64_t h = 2 * (cap[0] + 2); /* A[2][nx] */
-  if (dim == 3) {
-    h += 2 * (cap[1] + 2); /* B[2][ny] */
-    h += nbs__nbs_zways(cap[2], cap[3]) * (cap[2] + 2); /* C[nz][ways] */
-  } else {
-    h += cap[1] + 2; /* B[ny] */
-  }
+  if (dim == 3) h += 2 * (cap[1] + 2); /* B[2][ny] */
+  /* C[nz][w] in 3D, B[ny][w] in 2D: the lists of the elements */
+  h += nbs__nbs_zways(cap[dim - 1], cap[3]) * (cap[dim - 1] + 2);
   return h;
 }
 
-/* Number of entries of the started-heads records: 2 (nx + 1), and 2 (ny + 1) + nz + 1 in
- * 3D (each record has room for one entry more than the heads it can name, written and not
- * counted by a push that starts no list). */
+/* Number of entries of the started-heads records: 2 (nx + 1) and RC's nz + 1 (3D) or
+ * ny + 1 (2D), and in 3D 2 (ny + 1) (each record has room for one entry more than the heads
+ * it can name, written and not counted by a push that starts no list). */
 static int64_t nbs__nbs_record_count(int dim, const int64_t cap[4]) {
-  return 2 * (cap[0] + 1) + (dim == 3 ? 2 * (cap[1] + 1) + cap[2] + 1 : 0);
+  return 2 * (cap[0] + 1) + cap[dim - 1] + 1 + (dim == 3 ? 2 * (cap[1] + 1) : 0);
 }
 
-/* Number of layer counts CN (3D: nz + 2, padded like C; none in 2D). */
-static int64_t nbs__nbs_count_count(int dim, const int64_t cap[4]) {
-  return dim == 3 ? cap[2] + 2 : 0;
-}
+/* Number of counts CN of the lists of the elements (nz + 2 in 3D, ny + 2 in 2D: padded like
+ * their heads). */
+static int64_t nbs__nbs_count_count(int dim, const int64_t cap[4]) { return cap[dim - 1] + 2; }
 
 /* Bytes of the arrays that follow the cells per axis, heads, layer counts and records: what
  * the cell budget bounds. */
@@ -223,63 +228,54 @@ static uint64_t nbs__nbs_axis_bytes(int dim, const int64_t cap[4]) {
          sizeof(int32_t);
 }
 
-/* Bytes of the whole layout: heads, layer counts, records of started heads and the next
- * arrays of N int32 each, two in 2D (Y, X: eq. 3.65) and one in 3D (Z; Y and X are in the
- * layer block). */
+/* Bytes of the whole layout: heads, counts, records of started heads and the next array of
+ * N int32 of the lists of the elements (Z in 3D, Y in 2D; the others are in the block). */
 static uint64_t nbs__nbs_layout_bytes(int dim, const int64_t cap[4]) {
-  uint64_t ints = nbs__nbs_axis_bytes(dim, cap) / sizeof(int32_t) +
-                  (uint64_t)(dim == 3 ? 1 : 2) * (uint64_t)cap[3];
+  uint64_t ints = nbs__nbs_axis_bytes(dim, cap) / sizeof(int32_t) + (uint64_t)cap[3];
   return ints * sizeof(int32_t);
 }
 
 /* Points the arrays of *L into `work`, laid out for dimension dim and capacities cap[]. */
 static void nbs__nbs_layout_at(nbs__nbs_layout *L, void *work, int dim, const int64_t cap[4]) {
   int32_t *w = work;
+  const int64_t nl = cap[dim - 1]; /* the lists of the elements: layers (3D), rows (2D) */
   L->bytes = (size_t)nbs__nbs_layout_bytes(dim, cap);
+  L->zways = nbs__nbs_zways(nl, cap[3]);
   if (dim == 3) {
     L->C = w;
-    L->zways = nbs__nbs_zways(cap[2], cap[3]);
-    w += L->zways * (cap[2] + 2);
+    w += L->zways * (nl + 2);
     L->B0 = w;
     w += cap[1] + 2;
     L->B1 = w;
     w += cap[1] + 2;
   } else {
     L->C = NULL;
-    L->zways = 0;
     L->B0 = w;
-    w += cap[1] + 2;
+    w += L->zways * (nl + 2);
     L->B1 = NULL;
   }
   L->A0 = w;
   w += cap[0] + 2;
   L->A1 = w;
   w += cap[0] + 2;
-  L->CN = dim == 3 ? w : NULL;
-  w += nbs__nbs_count_count(dim, cap);
+  L->CN = w;
+  w += nl + 2;
+  L->RC = w;
+  w += nl + 1;
   if (dim == 3) {
-    L->RC = w;
-    w += cap[2] + 1;
     L->RB0 = w;
     w += cap[1] + 1;
     L->RB1 = w;
     w += cap[1] + 1;
   } else {
-    L->RC = L->RB0 = L->RB1 = NULL;
+    L->RB0 = L->RB1 = NULL;
   }
   L->RA0 = w;
   w += cap[0] + 1;
   L->RA1 = w;
   w += cap[0] + 1;
-  if (dim == 3) {
-    L->Z = w;
-    L->Y = L->X = NULL;
-  } else {
-    L->Z = NULL;
-    L->Y = w;
-    w += cap[3];
-    L->X = w;
-  }
+  L->Z = dim == 3 ? w : NULL;
+  L->Y = dim == 3 ? NULL : w;
 }
 
 /* The dimension of the NBS layout that ctx->work holds (see the file comment). */
@@ -370,22 +366,14 @@ typedef struct nbs__nbs_block {
   int32_t *Y;        /* the entry's link in the y-lists */
 } nbs__nbs_block;
 
-/* The doubles from one entry's coordinates to the next's. */
-#define NBS__NBS_STRIDE ((int)(sizeof(nbs__nbs_entry) / sizeof(double)))
-
 /* Bytes of one entry of the layer block. */
 static size_t nbs__nbs_entry_bytes(bool radii) {
   return sizeof(nbs__nbs_entry) + (radii ? sizeof(double) : 0) + sizeof(int32_t);
 }
 
-/* The link in the x-lists of entry a: the block's (3D, K) or the elements' array X (2D). */
-static inline int32_t *nbs__nbs_xlink(const nbs__nbs_block *K, int32_t *X, int32_t a) {
-  return K ? &K->e[a].X : &X[a];
-}
-
-/* Checks the central cell, whose x-list (set 0, linked by X) starts at c, with the contact
- * mask (2D: the mask of section 3.8, cells (ix-1,iy-1) (ix,iy-1) (ix+1,iy-1) (ix-1,iy); 3D:
- * the 13 cells of eq. 3.73):
+/* Checks the central cell, whose x-list (set 0, linked by the entries' X) starts at c,
+ * with the contact mask (2D: the mask of section 3.8, cells (ix-1,iy-1) (ix,iy-1)
+ * (ix+1,iy-1) (ix-1,iy); 3D: the 13 cells of eq. 3.73):
  *   - the cell itself: every element against those after it in the list (each pair once);
  *   - the cell (ix-1) of the central row, nb[0]: A0[ix-1], unmarked by the caller;
  *   - the cells ix-1, ix, ix+1 of the neighbouring rows, nb[1..3]: A1[ix-1], A1[ix],
@@ -393,19 +381,20 @@ static inline int32_t *nbs__nbs_xlink(const nbs__nbs_block *K, int32_t *X, int32
  *     (iy,iz-1), (iy+1,iz-1), so these three lists cover the 3 cells of row iy-1 in layer
  *     iz and the 9 cells of layer iz-1.
  * Together 4 (2D) or 13 (3D) neighbour cells: each pair of neighbouring cells is visited
- * from exactly one of the two. In 2D the lists link element numbers (K is NULL); in 3D they
- * link entries of the layer block K, which holds the coordinates the test reads. */
-static inline nbs_status nbs__nbs_pair(nbs__run *run, const nbs__nbs_block *K, int32_t a,
-                                       int32_t b) {
-  if (!K) return nbs__offer(run, a, b);
-  /* nbs__offer on the block's copies, the pair stored under the elements' numbers. (One
-   * nbs__offer_at taking the points, shared with nbs__offer, made direct 3-17% slower and
-   * this 3% slower with GCC 12, depending on how it passed the radii.) */
+ * from exactly one of the two. The lists link entries of the block K, which holds the
+ * coordinates the test reads (dim of them); the pairs are stored under the elements'
+ * numbers. nbs__nbs_pair offers one pair, nbs__nbs_pairs one element against many, and
+ * nbs__nbs_check_cell the whole mask. */
+static inline nbs_status nbs__nbs_pair(nbs__run *run, const nbs__nbs_block *K, int dim,
+                                       int32_t a, int32_t b) {
+  /* nbs__offer on the block's copies. (One nbs__offer_at taking the points, shared with
+   * nbs__offer, made direct 3-17% slower and this 3% slower with GCC 12, depending on how
+   * it passed the radii.) */
   run->candidates++;
   const nbs__nbs_entry *ea = &K->e[a], *eb = &K->e[b];
   if (run->mode == NBS_MODE_CONTACTS) {
     const bool r = K->r != NULL;
-    const bool t = nbs__touch_at(ea->x, eb->x, 3, r, r ? K->r[a] : 0, r ? K->r[b] : 0, run->d2);
+    const bool t = nbs__touch_at(ea->x, eb->x, dim, r, r ? K->r[a] : 0, r ? K->r[b] : 0, run->d2);
     /* a full buffer is flushed (or found at max_pairs) only for a pair that touches */
     if (run->count == run->cap) return t ? nbs__emit(run, ea->id, eb->id) : NBS_OK;
     const int32_t ia = ea->id, ib = eb->id;
@@ -420,33 +409,13 @@ static inline nbs_status nbs__nbs_pair(nbs__run *run, const nbs__nbs_block *K, i
   return nbs__emit(run, ea->id, eb->id);
 }
 
-static inline nbs_status nbs__nbs_check_cell(nbs__run *run, const nbs__nbs_block *K,
-                                             int32_t *X, int32_t c, const int32_t nb[4]) {
-#define NBS__NBS_NEXT(a) (*nbs__nbs_xlink(K, X, (a)))
-  for (int32_t a = c; a != NBS__EMPTY; a = NBS__NBS_NEXT(a)) {
-    for (int32_t b = NBS__NBS_NEXT(a); b != NBS__EMPTY; b = NBS__NBS_NEXT(b)) {
-      NBS__TRY(nbs__nbs_pair(run, K, a, b));
-    }
-  }
-  for (int l = 0; l < 4; l++) {
-    if (nb[l] == NBS__EMPTY) continue;
-    for (int32_t a = c; a != NBS__EMPTY; a = NBS__NBS_NEXT(a)) {
-      for (int32_t b = nb[l]; b != NBS__EMPTY; b = NBS__NBS_NEXT(b)) {
-        NBS__TRY(nbs__nbs_pair(run, K, a, b));
-      }
-    }
-  }
-#undef NBS__NBS_NEXT
-  return NBS_OK;
-}
-
 /* nbs__nbs_pair of entry a with each of the n entries got[]: in contact mode, where the pair
  * buffer has room for them all, without a branch per pair (each pair is stored, and kept
  * by counting it only when the elements touch). */
-static inline nbs_status nbs__nbs_pairs(nbs__run *run, const nbs__nbs_block *K, int32_t a,
-                                        const int32_t *got, int n) {
+static inline nbs_status nbs__nbs_pairs(nbs__run *run, const nbs__nbs_block *K, int dim,
+                                        int32_t a, const int32_t *got, int n) {
   if (run->mode != NBS_MODE_CONTACTS || run->cap - run->count < (size_t)n) {
-    for (int j = 0; j < n; j++) NBS__TRY(nbs__nbs_pair(run, K, a, got[j]));
+    for (int j = 0; j < n; j++) NBS__TRY(nbs__nbs_pair(run, K, dim, a, got[j]));
     return NBS_OK;
   }
   const nbs__nbs_entry *ea = &K->e[a];
@@ -457,7 +426,7 @@ static inline nbs_status nbs__nbs_pairs(nbs__run *run, const nbs__nbs_block *K, 
   for (int j = 0; j < n; j++) {
     const int32_t b = got[j];
     const nbs__nbs_entry *eb = &K->e[b];
-    const bool t = nbs__touch_at(ea->x, eb->x, 3, kr != NULL, kr ? kr[a] : 0, kr ? kr[b] : 0, d2);
+    const bool t = nbs__touch_at(ea->x, eb->x, dim, kr != NULL, kr ? kr[a] : 0, kr ? kr[b] : 0, d2);
     const int32_t ia = ea->id, ib = eb->id;
     nbs_pair p;
     p.i = ia < ib ? ia : ib;
@@ -471,18 +440,17 @@ static inline nbs_status nbs__nbs_pairs(nbs__run *run, const nbs__nbs_block *K, 
   return NBS_OK;
 }
 
-/* Entries gathered from the neighbour lists at a time (nbs__nbs_check_cell3). */
+/* Entries gathered from the neighbour lists at a time (nbs__nbs_check_cell). */
 #define NBS__NBS_GATHER 64
 
-/* nbs__nbs_check_cell in 3D, on the block K: the same pairs, the four neighbour lists walked
- * side by side. K->e[-1] is a sentinel whose link is NBS__EMPTY, so that a walk that has
+/* The four neighbour lists are walked side by side. K->e[-1] is a sentinel whose link is NBS__EMPTY, so that a walk that has
  * ended stays ended without a branch; the entries met are gathered, up to NBS__NBS_GATHER
  * at a time, and every element of the central cell is tested against them. */
-static inline nbs_status nbs__nbs_check_cell3(nbs__run *run, const nbs__nbs_block *K, int32_t c,
-                                              const int32_t nb[4]) {
+static inline nbs_status nbs__nbs_check_cell(nbs__run *run, const nbs__nbs_block *K, int dim,
+                                             int32_t c, const int32_t nb[4]) {
   const nbs__nbs_entry *E = K->e;
   for (int32_t a = c; a != NBS__EMPTY; a = E[a].X) {
-    for (int32_t b = E[a].X; b != NBS__EMPTY; b = E[b].X) NBS__TRY(nbs__nbs_pair(run, K, a, b));
+    for (int32_t b = E[a].X; b != NBS__EMPTY; b = E[b].X) NBS__TRY(nbs__nbs_pair(run, K, dim, a, b));
   }
   int32_t b0 = nb[0], b1 = nb[1], b2 = nb[2], b3 = nb[3];
   int32_t got[NBS__NBS_GATHER];
@@ -503,35 +471,25 @@ static inline nbs_status nbs__nbs_check_cell3(nbs__run *run, const nbs__nbs_bloc
       b3 = E[b3].X;
     } while (n <= NBS__NBS_GATHER - 4 && (b0 & b1 & b2 & b3) != NBS__EMPTY);
     for (int32_t a = c; a != NBS__EMPTY; a = E[a].X) {
-      NBS__TRY(nbs__nbs_pairs(run, K, a, got, n));
+      NBS__TRY(nbs__nbs_pairs(run, K, dim, a, got, n));
     }
   }
   return NBS_OK;
 }
 
-/* The loop over a central row whose elements (linked by Y, from `row`) are on the x-lists
- * of set 0 (A0) and whose neighbouring rows are on set 1 (A1): the first element met in a
- * "new" cell makes it the central cell, which is marked "old" and checked with the contact
- * mask (nbs__nbs_check_cell). x holds the coordinates the lists' entries refer to (dim per
- * entry): the caller's in 2D, the layer block's in 3D. */
-static inline nbs_status nbs__nbs_check_row(nbs__run *run, const nbs__nbs_axes *g,
-                                            const nbs__nbs_block *K, const double *x, int dim,
-                                            const int32_t *Y, int32_t *X, int32_t *A0,
-                                            const int32_t *A1, int32_t row) {
-  for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) {
-    const int32_t ix = nbs__nbs_cell(g, x, dim, e, 0);
-    if (nbs__is_marked(A0[ix])) continue;
-    const int32_t c = A0[ix];
-    A0[ix] = nbs__mark(c);
-    const int32_t il = nbs__nbs_near(g, ix, -1, 0), ir = nbs__nbs_near(g, ix, 1, 0);
-    const int32_t nb[4] = {nbs__unmark(A0[il]), A1[il], A1[ix], A1[ir]};
-    if (K) {
-      NBS__TRY(nbs__nbs_check_cell3(run, K, c, nb));
-    } else {
-      NBS__TRY(nbs__nbs_check_cell(run, K, X, c, nb));
-    }
-  }
-  return NBS_OK;
+/* Marks the central cell of the entry e (set 0, A0), if it is new, and checks it with the
+ * contact mask: the loop over a central row of steps 8 (3D) and of section 3.8, for one of
+ * its elements. */
+static inline nbs_status nbs__nbs_check_at(nbs__run *run, const nbs__nbs_axes *g,
+                                           const nbs__nbs_block *K, int dim, int32_t *A0,
+                                           const int32_t *A1, int32_t e) {
+  const int32_t ix = nbs__nbs_at(g, K->e[e].x, 0);
+  if (nbs__is_marked(A0[ix])) return NBS_OK;
+  const int32_t c = A0[ix];
+  A0[ix] = nbs__mark(c);
+  const int32_t il = nbs__nbs_near(g, ix, -1, 0), ir = nbs__nbs_near(g, ix, 1, 0);
+  const int32_t nb[4] = {nbs__unmark(A0[il]), A1[il], A1[ix], A1[ir]};
+  return nbs__nbs_check_cell(run, K, dim, c, nb);
 }
 
 /* Propagates an error of the pair sink, forgetting the (now dirty) layout. */
@@ -552,93 +510,16 @@ static inline nbs_status nbs__nbs_check_row(nbs__run *run, const nbs__nbs_axes *
     (top) += nbs__h == NBS__EMPTY;                                                            \
   } while (0)
 
-/* Pushes element e onto the x-list of its cell in the set A (record R, top). */
-#define NBS__NBS_PUSH_X(e, A, R, top, dim)                                                    \
+/* Pushes entry e of the block K onto the x-list of its cell in the set A (record R, top). */
+#define NBS__NBS_PUSH_X(e, A, R, top)                                                         \
   do {                                                                                        \
-    const int32_t nbs__ix = nbs__nbs_cell(g, x, dim, (e), 0);                                 \
-    NBS__NBS_PUSH((e), *nbs__nbs_xlink(Kp, X, (e)), A, nbs__ix, R, top);                      \
-  } while (0)
-
-/* Pushes the elements of the y-lists starting at first0 and first1 onto the x-lists of the sets A0
- * and A1, walking the two lists side by side so that their cache misses overlap; each
- * x-list still gets its elements in the book's order. */
-#define NBS__NBS_PUSH_ROWS(first0, first1, dim)                                               \
-  do {                                                                                        \
-    int32_t f0 = (first0), f1 = (first1);                                                     \
-    while (f0 != NBS__EMPTY && f1 != NBS__EMPTY) {                                            \
-      const int32_t m0 = Y[f0], m1 = Y[f1];                                                   \
-      NBS__NBS_PUSH_X(f0, A0, RA0, na0, dim);                                                 \
-      NBS__NBS_PUSH_X(f1, A1, RA1, na1, dim);                                                 \
-      f0 = m0;                                                                                \
-      f1 = m1;                                                                                \
-    }                                                                                         \
-    for (; f0 != NBS__EMPTY; f0 = Y[f0]) NBS__NBS_PUSH_X(f0, A0, RA0, na0, dim);              \
-    for (; f1 != NBS__EMPTY; f1 = Y[f1]) NBS__NBS_PUSH_X(f1, A1, RA1, na1, dim);              \
+    const int32_t nbs__ix = nbs__nbs_at(g, K->e[e].x, 0);                                     \
+    NBS__NBS_PUSH((e), K->e[e].X, A, nbs__ix, R, top);                                        \
   } while (0)
 
 /* Empties the heads H[R[0..top-1]] that a set's lists were started at. */
 static inline void nbs__nbs_clear(int32_t *H, const int32_t *R, int32_t top) {
   for (int32_t i = 0; i < top; i++) H[R[i]] = NBS__EMPTY;
-}
-
-/* ---- 2D (section 3.8) ---------------------------------------------------------------- */
-
-static inline __attribute__((always_inline)) nbs_status
-nbs__nbs_2d_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bool fold) {
-  axes.fold = fold;
-  const nbs__nbs_axes *g = &axes; /* a copy: the heads' stores cannot alias its masks */
-  const double *x = run->x;
-  const int32_t n = run->n;
-  int32_t *restrict B = L->B0;
-  int32_t *restrict A0 = L->A0;
-  int32_t *restrict A1 = L->A1;
-  int32_t *restrict Y = L->Y;
-  int32_t *restrict X = L->X;
-  const nbs__nbs_block *const Kp = NULL; /* the x-links are X */
-  int32_t *restrict RA0 = L->RA0;
-  int32_t *restrict RA1 = L->RA1;
-
-  /* Mapping onto rows: integerise y and push each element on its y-list (the book's
-   * eqs. 3.34-3.35 with one coordinate): Y[k] = B[iy]; B[iy] = k. */
-  for (int32_t k = 0; k < n; k++) {
-    int32_t iy = nbs__nbs_cell(g, x, 2, k, 1);
-    Y[k] = B[iy];
-    B[iy] = k;
-  }
-
-  /* Loop over the elements: the first element found in a "new" row makes it the central
-   * row. */
-  for (int32_t k = 0; k < n; k++) {
-    int32_t iy = nbs__nbs_cell(g, x, 2, k, 1);
-    if (nbs__is_marked(B[iy])) continue;
-    const int32_t row = B[iy];
-    B[iy] = nbs__mark(row); /* mark the row "old" */
-    /* Row iy-1 may have been central already: read its head unmarked. */
-    const int32_t below = nbs__unmark(B[nbs__nbs_near(g, iy, -1, 1)]);
-
-    /* x-lists of set 0: the elements of the central row iy; x-lists of set 1: the elements
-     * of the neighbouring row iy-1. */
-    int32_t na0 = 0, na1 = 0;
-    NBS__NBS_PUSH_ROWS(row, below, 2);
-
-    /* Loop over the central row: the first element in a "new" cell makes it the central
-     * cell; mark it and check it with the contact mask. */
-    NBS__NBS_TRY(nbs__nbs_check_row(run, g, NULL, x, 2, Y, X, A0, A1, row));
-
-    /* Removal of the x-lists: reset the heads the two rows started. */
-    nbs__nbs_clear(A0, RA0, na0);
-    nbs__nbs_clear(A1, RA1, na1);
-  }
-
-  /* Removal of the y-lists, by a loop over the elements (eqs. 3.36-3.37 for rows). */
-  for (int32_t k = 0; k < n; k++) B[nbs__nbs_cell(g, x, 2, k, 1)] = NBS__EMPTY;
-  return NBS_OK;
-}
-
-/* 2D with an axis folded or not: two copies, so that an unfolded grid does its index
- * arithmetic exactly as before folding existed. */
-static nbs_status nbs__nbs_2d(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes) {
-  return axes.fold ? nbs__nbs_2d_body(run, L, axes, true) : nbs__nbs_2d_body(run, L, axes, false);
 }
 
 /* ---- 3D (section 3.10; the numbered steps are those of the pseudocode on p. 127) ----- */
@@ -717,10 +598,7 @@ nbs__nbs_3d_layer(nbs__run *run, const nbs__nbs_layout *L, const nbs__nbs_axes *
   const int32_t *restrict RB1 = L->RB1;
   int32_t *restrict RA0 = L->RA0;
   int32_t *restrict RA1 = L->RA1;
-  const double *x = K->e[0].x; /* the coordinates the lists' entries refer to */
-  const nbs__nbs_block *const Kp = K;
   const int32_t *restrict Y = K->Y;
-  int32_t *X = NULL; /* the x-links are in the block's entries */
 
   /* Step 5: loop over the central layer; the first element in a "new" row (iy,iz) makes it
    * the central row. Those first elements, in the order of the layer, are the ones step 3
@@ -740,14 +618,16 @@ nbs__nbs_3d_layer(nbs__run *run, const nbs__nbs_layout *L, const nbs__nbs_axes *
     /* Step 6: the elements of the central row onto the x-lists of set 0; step 7: the
      * elements of the neighbouring rows onto the x-lists of set 1. */
     int32_t na0 = 0, na1 = 0;
-    for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) NBS__NBS_PUSH_X(e, A0, RA0, na0, NBS__NBS_STRIDE);
+    for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) NBS__NBS_PUSH_X(e, A0, RA0, na0);
     for (int l = 0; l < 4; l++) {
-      for (int32_t e = nrow[l]; e != NBS__EMPTY; e = Y[e]) NBS__NBS_PUSH_X(e, A1, RA1, na1, NBS__NBS_STRIDE);
+      for (int32_t e = nrow[l]; e != NBS__EMPTY; e = Y[e]) NBS__NBS_PUSH_X(e, A1, RA1, na1);
     }
 
     /* Step 8: loop over the central row; the first element in a "new" cell (ix,iy,iz)
      * makes it the central cell: mark it and check it with the 13-cell mask (eq. 3.73). */
-    NBS__TRY(nbs__nbs_check_row(run, g, K, x, NBS__NBS_STRIDE, Y, X, A0, A1, row));
+    for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) {
+      NBS__TRY(nbs__nbs_check_at(run, g, K, 3, A0, A1, e));
+    }
 
     /* Steps 9 and 10: remove the x-lists of the central and of the neighbouring rows,
      * resetting the heads they started. */
@@ -906,10 +786,177 @@ static nbs_status nbs__nbs_3d(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_
   return axes.fold ? nbs__nbs_3d_body(run, L, axes, true) : nbs__nbs_3d_body(run, L, axes, false);
 }
 
+/* ---- 2D (section 3.8) ---------------------------------------------------------------- */
+
+/* Copies element k into entry l of the block and pushes that entry onto the x-list of its
+ * cell in the set A (record R, top): the 2D analogue of NBS__NBS_TAKE, one level down (a
+ * row's elements go straight onto x-lists). */
+#define NBS__NBS_TAKE2(k, l, A, R, top)                                                       \
+  do {                                                                                        \
+    const int32_t nbs__l = (l);                                                               \
+    const double *nbs__p = x + (size_t)(k) * 2;                                               \
+    nbs__nbs_entry *nbs__q = &K.e[nbs__l];                                                    \
+    nbs__q->x[0] = nbs__p[0];                                                                 \
+    nbs__q->x[1] = nbs__p[1];                                                                 \
+    if (r) K.r[nbs__l] = r[k];                                                                \
+    nbs__q->id = (k);                                                                         \
+    const int32_t nbs__ix = nbs__nbs_at(g, nbs__q->x, 0);                                     \
+    NBS__NBS_PUSH(nbs__l, nbs__q->X, A, nbs__ix, R, top);                                     \
+  } while (0)
+
+/* The loop over the central row, whose entries are the ring's [s, s + len) (mod cap): the
+ * first element in a "new" cell makes it the central cell (nbs__nbs_check_at). */
+static inline nbs_status nbs__nbs_2d_row(nbs__run *run, const nbs__nbs_axes *g,
+                                         const nbs__nbs_block *K, int32_t *A0, const int32_t *A1,
+                                         int32_t s, int32_t len, int32_t cap) {
+  for (int32_t j = 0, e = s; j < len; j++) {
+    NBS__TRY(nbs__nbs_check_at(run, g, K, 2, A0, A1, e));
+    e = e + 1 == cap ? 0 : e + 1;
+  }
+  return NBS_OK;
+}
+
+/* Section 3.8 with the same representation as 3D's (see the file comment): the y-lists
+ * (one per row, kept as w lists) link the elements; the central row and the row below it
+ * are copied into the block as they are walked, straight onto the x-lists of sets 0 and 1,
+ * and rows chain upwards as 3D's layers do. */
+static inline __attribute__((always_inline)) nbs_status
+nbs__nbs_2d_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bool fold) {
+  axes.fold = fold;
+  const nbs__nbs_axes *g = &axes; /* a copy: the heads' stores cannot alias its masks */
+  const double *x = run->x;
+  const double *r = run->r;
+  const int32_t n = run->n;
+  int32_t *restrict B = L->B0;
+  const int32_t ways = L->zways;
+  int32_t *restrict CN = L->CN;
+  int32_t *restrict RC = L->RC;
+  int32_t *restrict Y = L->Y;
+  int32_t *restrict A0 = L->A0;
+  int32_t *restrict A1 = L->A1;
+  int32_t *restrict RA0 = L->RA0;
+  int32_t *restrict RA1 = L->RA1;
+
+  /* Mapping onto rows: integerise y and push each element on its y-list (the book's
+   * eqs. 3.34-3.35 with one coordinate): Y[k] = B[iy]; B[iy] = k, the row's list k mod w of
+   * its w. CN[iy] counts the row's elements; RC notes each row at its first element. */
+  int32_t nc = 0;
+  for (int32_t k = 0; k < n; k++) {
+    const int32_t iy = nbs__nbs_cell(g, x, 2, k, 1);
+    int32_t *h = &B[ways * iy + (k & (ways - 1))];
+    Y[k] = *h;
+    *h = k;
+    RC[nc] = iy;
+    nc += CN[iy]++ == 0;
+  }
+
+  /* The block: as many entries as the largest row and the one below it hold. */
+  int32_t need = 1;
+  for (int32_t i = 0; i < nc; i++) {
+    const int32_t iy = RC[i];
+    const int32_t t = CN[iy] + CN[nbs__nbs_near(g, iy, -1, 1)];
+    need = t > need ? t : need;
+  }
+  nbs__nbs_block K = {0};
+  NBS__NBS_TRY(nbs__nbs_block_reserve(run, need, &K));
+  const nbs__nbs_block *Kp = &K;
+
+  /* Loop over the elements (over RC: the rows in the order of their first elements): the
+   * first element found in a "new" row makes it the central row; then the row above it,
+   * while new and not empty. */
+  const int32_t cap = need; /* the block, used as a ring */
+  for (int32_t i = 0; i < nc; i++) {
+    int32_t iy = RC[i];
+    if (CN[iy] < 0) continue;
+    CN[iy] = -1; /* mark the row "old" */
+    const int32_t iu = nbs__nbs_near(g, iy, -1, 1);
+    int32_t e[NBS__NBS_ZWAYS], u[NBS__NBS_ZWAYS];
+    for (int w = 0; w < ways; w++) {
+      e[w] = B[ways * iy + w];
+      u[w] = B[ways * iu + w];
+    }
+    /* x-lists of set 0: the elements of the central row iy (entries from 0 up); of set 1:
+     * those of row iy-1 (entries from the last down); walked side by side. */
+    int32_t m = 0, mu = cap - 1, na0 = 0, na1 = 0;
+    for (bool more = true; more;) {
+      more = false;
+      for (int w = 0; w < ways; w++) {
+        if (e[w] != NBS__EMPTY) {
+          const int32_t next = Y[e[w]];
+          NBS__NBS_TAKE2(e[w], m++, A0, RA0, na0);
+          e[w] = next;
+          more = true;
+        }
+        if (u[w] != NBS__EMPTY) {
+          const int32_t next = Y[u[w]];
+          NBS__NBS_TAKE2(u[w], mu--, A1, RA1, na1);
+          u[w] = next;
+          more = true;
+        }
+      }
+    }
+    NBS__NBS_TRY(nbs__nbs_2d_row(run, g, Kp, A0, A1, 0, m, cap));
+    /* Removal of the x-lists: reset the heads the two rows started. */
+    nbs__nbs_clear(A0, RA0, na0);
+    nbs__nbs_clear(A1, RA1, na1);
+
+    int32_t s = 0, len = m; /* the central row's entries */
+    for (;;) {
+      const int32_t iv = nbs__nbs_near(g, iy, 1, 1);
+      if (CN[iv] <= 0) break; /* empty or old: the chain ends */
+      iy = iv;
+      CN[iy] = -1; /* mark the row "old" */
+      na0 = na1 = 0;
+      /* the row just done, now the row below: its entries onto the x-lists of set 1 */
+      for (int32_t j = 0, l = s; j < len; j++) {
+        const int32_t ix = nbs__nbs_at(g, K.e[l].x, 0);
+        NBS__NBS_PUSH(l, K.e[l].X, A1, ix, RA1, na1);
+        l = l + 1 == cap ? 0 : l + 1;
+      }
+      /* the new central row's elements into the ring after them, onto set 0 */
+      s = s + len;
+      s = s >= cap ? s - cap : s;
+      m = s;
+      len = 0;
+      for (int w = 0; w < ways; w++) e[w] = B[ways * iy + w];
+      for (bool more = true; more;) {
+        more = false;
+        for (int w = 0; w < ways; w++) {
+          if (e[w] != NBS__EMPTY) {
+            const int32_t next = Y[e[w]];
+            NBS__NBS_TAKE2(e[w], m, A0, RA0, na0);
+            m = m + 1 == cap ? 0 : m + 1;
+            len++;
+            e[w] = next;
+            more = true;
+          }
+        }
+      }
+      NBS__NBS_TRY(nbs__nbs_2d_row(run, g, Kp, A0, A1, s, len, cap));
+      nbs__nbs_clear(A0, RA0, na0);
+      nbs__nbs_clear(A1, RA1, na1);
+    }
+  }
+
+  /* Removal of the y-lists (and their counts): reset the heads of the rows noted in RC. */
+  for (int32_t i = 0; i < nc; i++) {
+    const int32_t iy = RC[i];
+    for (int w = 0; w < ways; w++) B[ways * iy + w] = NBS__EMPTY;
+    CN[iy] = 0;
+  }
+  return NBS_OK;
+}
+
+/* 2D with an axis folded or not: two copies, so that an unfolded grid does its index
+ * arithmetic exactly as before folding existed. */
+static nbs_status nbs__nbs_2d(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes) {
+  return axes.fold ? nbs__nbs_2d_body(run, L, axes, true) : nbs__nbs_2d_body(run, L, axes, false);
+}
+
+#undef NBS__NBS_TAKE2
 #undef NBS__NBS_PUSH
 #undef NBS__NBS_PUSH_X
 #undef NBS__NBS_TAKE
-#undef NBS__NBS_PUSH_ROWS
 #undef NBS__NBS_TRY
 
 /* ---- the dispatcher ------------------------------------------------------------------ */
@@ -1050,7 +1097,8 @@ bool nbs__nbs_fold(const nbs__run *run, int64_t lists[3]) {
 
   /* 3. The lists of each axis: a power of two (a list is c AND m - 1) of at least 4 (so
    * that the offsets -1, 0, +1 stay distinct), rounded down from a scaled t (the budget
-   * holds) and up from an extent (its cells never share a list); an axis is folded where
+   * holds; in 2D with both axes scaled, y up and x down by as much more, see the file
+   * comment) and up from an extent (its cells never share a list); an axis is folded where
    * that is fewer than its cells.
    * Scaling overlays cells that are far apart, which costs only candidates when the
    * elements are spread, but could pile them up if they are not (a sheet, a lattice whose
@@ -1063,12 +1111,20 @@ bool nbs__nbs_fold(const nbs__run *run, int64_t lists[3]) {
   bool folded, scaled;
   for (;;) {
     folded = scaled = false;
-    for (int a = 0; a < dim; a++) {
+    /* 2D with both axes scaled: y (the rows, whose two largest neighbours size the block)
+     * is rounded up, and x down by as much more as that added */
+    const bool both = dim == 2 && t[0] < e[0] && t[1] < e[1];
+    double over = 1;
+    for (int a = dim - 1; a >= 0; a--) {
       int64_t m = 4;
       while (m < t[a]) m *= 2;
       if (t[a] < e[a]) {
         scaled = true;
-        if (dim == 2 && m > t[a] && m > 4) m /= 2;
+        if (both && a == 1) {
+          over = (double)m / (double)t[1];
+        } else if (dim == 2) {
+          while (m > 4 && (double)m * over > (double)t[a]) m /= 2;
+        }
       }
       lists[a] = m < g->n[a] ? m : g->n[a];
       folded |= m < g->n[a];
@@ -1163,11 +1219,7 @@ nbs_status nbs__nbs(nbs__run *run) {
 
   nbs__nbs_layout L;
   nbs__nbs_layout_at(&L, ctx->work, dim, ctx->work_cap);
-  if (dim == 2) {
-    run->work_bytes = L.bytes;
-    return nbs__nbs_2d(run, &L, axes);
-  }
-  const nbs_status s = nbs__nbs_3d(run, &L, axes);
+  const nbs_status s = dim == 2 ? nbs__nbs_2d(run, &L, axes) : nbs__nbs_3d(run, &L, axes);
   run->work_bytes = L.bytes + ctx->nbs_block_size;
   return s;
 }

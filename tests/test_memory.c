@@ -17,19 +17,22 @@ static nbs__run prepared_run(nbs_context *ctx, const nbs_input *in) {
   return run;
 }
 
-/* The entries of NBS's layer block (3D): the most elements a layer and the one below it
- * hold together, on the grid the library derives (nbs__prepare) and with its layers folded
- * as the library folds them (nbs__nbs_fold: layer iz is list iz mod m, and the list below
- * list 0 is list m - 1); at least 1. */
+/* The entries of NBS's block: the most elements a layer (3D; a row in 2D) and the one
+ * below it hold together, on the grid the library derives (nbs__prepare) and with its last
+ * axis folded as the library folds it (nbs__nbs_fold: layer iz is list iz mod m, and the
+ * list below list 0 is list m - 1); at least 1. */
 static int64_t nbs_block_entries(nbs_context *ctx, const nbs_input *in) {
   nbs__run run = prepared_run(ctx, in);
   int64_t lists[3];
   nbs__nbs_fold(&run, lists);
-  const int64_t nz = lists[2];
-  const bool folded = nz < run.grid.n[2];
+  const int a = in->dim - 1;
+  const int64_t nz = lists[a];
+  const bool folded = nz < run.grid.n[a];
   int64_t *count = calloc((size_t)nz, sizeof *count);
   if (!count) abort();
-  for (int64_t k = 0; k < in->n; k++) count[nbs__cell(&run.grid, in->coords + 3 * k, 2) % nz]++;
+  for (int64_t k = 0; k < in->n; k++) {
+    count[nbs__cell(&run.grid, in->coords + in->dim * k, a) % nz]++;
+  }
   int64_t most = 1;
   for (int64_t iz = 0; iz < nz; iz++) {
     const int64_t below = iz > 0 ? count[iz - 1] : folded ? count[nz - 1] : 0;
@@ -39,11 +42,12 @@ static int64_t nbs_block_entries(nbs_context *ctx, const nbs_input *in) {
   return most;
 }
 
-/* NBS: 2D ny + 2nx + 2N integers (eq. 3.65) plus the records of the heads each set of lists
- * started (2nx); 3D nz + 2ny + 2nx + N integers (eq. 3.80 without the y- and x-links, which
- * are in the layer block), with up to 8 z-lists per layer instead of one (nbs__nbs_zways),
- * plus nz layer counts and the records (nz + 2ny + 2nx), plus the layer block of 36 bytes per
- * entry and its sentinel entry (see src/munjiza_nbs.c). The padding cells on each side of
+/* NBS: 2D ny + 2nx + N integers (eq. 3.65 without the x-links, which are in the block); 3D
+ * nz + 2ny + 2nx + N integers (eq. 3.80 without the y- and x-links, in the block); with up
+ * to 8 lists per row (2D) or layer (3D) instead of one (nbs__nbs_zways), plus their counts
+ * and the records of the heads each set of lists started (ny + 2nx in 2D, nz + 2ny + 2nx in
+ * 3D), plus the block of 36 bytes per entry and its sentinel entry (see
+ * src/munjiza_nbs.c). The padding cells on each side of
  * each head array and the spare entry of each record are the fixed overhead. */
 static void test_nbs_formula(void) {
   /* uniform at three fractions; sparse and clustered, whose far elements fold the axes */
@@ -59,32 +63,30 @@ static void test_nbs_formula(void) {
         nbs_stats st;
         ASSERT_OK(detect_stats(ctx, &s, NBS_NBS, &st));
         nbs_input in = scene_input(&s);
-        const int64_t ways = dim == 3 ? nbs__nbs_zways(st.cells[2], n) : 0;
-        int64_t ints = dim == 2 ? st.cells[1] + 2 * st.cells[0] + 2 * n + 2 * st.cells[0]
-                                : (ways + 2) * st.cells[2] + 2 * st.cells[1] + 2 * st.cells[0] +
-                                      n + 2 * st.cells[1] + 2 * st.cells[0];
-        int64_t formula = ints * 4;
-        if (dim == 3) formula += (nbs_block_entries(ctx, &in) + 1) * (in.radii ? 44 : 36);
+        const int64_t ways = nbs__nbs_zways(st.cells[dim - 1], n);
+        int64_t ints = dim == 2 ? (ways + 2) * st.cells[1] + 4 * st.cells[0] + n
+                                : (ways + 2) * st.cells[2] + 4 * st.cells[1] + 4 * st.cells[0] + n;
+        int64_t formula = ints * 4 + (nbs_block_entries(ctx, &in) + 1) * (in.radii ? 44 : 36);
         int64_t extra = (int64_t)st.work_bytes - formula;
         CHECK_MSG(extra >= 0 && extra <= 128,
                   "%dD %s n=%lld fraction %g: NBS holds %zu work bytes, the formula %lld",
                   dim, scene_kind_name(kinds[f]), (long long)n, fractions[f], st.work_bytes,
                   (long long)formula);
-        /* NBS folds where the book's heads and records (with their padding: 8 ints in 2D,
-         * 15 and two per z-list of a layer in 3D) would take more ints than half the
+        /* NBS folds where the book's heads and records (with their padding: 9 ints in 2D,
+         * 15 in 3D, and two per list of a row or layer) would take more ints than half the
          * elements: the far elements of sparse and clustered scenes, uniform scenes at the
          * thinner fractions; never a crowded uniform scene (f = 0) */
         const nbs__run run = prepared_run(ctx, &in);
         const int64_t *cells = run.grid.n;
-        const int64_t zw = dim == 3 ? nbs__nbs_zways(cells[2], n) : 0;
-        const int64_t book = dim == 2 ? 5 * cells[0] + cells[1]
+        const int64_t zw = nbs__nbs_zways(cells[dim - 1], n);
+        const int64_t book = dim == 2 ? (zw + 2) * cells[1] + 4 * cells[0]
                                       : (zw + 2) * cells[2] + 4 * cells[1] + 4 * cells[0];
-        const int64_t pad = dim == 2 ? 8 : 15 + 2 * zw;
+        const int64_t pad = dim == 2 ? 9 + 2 * zw : 15 + 2 * zw;
         CHECK_MSG(st.compressed == (f >= 3 || (f > 0 && 2 * (book + pad) > n)),
                   "%dD %s n=%lld fraction %g: folded %d", dim, scene_kind_name(kinds[f]),
                   (long long)n, fractions[f], st.compressed);
         /* folded, the heads and records are fewer than the book's */
-        if (st.compressed) CHECK_MSG(ints - n * (dim == 2 ? 2 : 1) < book, "%dD %s n=%lld: "
+        if (st.compressed) CHECK_MSG(ints - n < book, "%dD %s n=%lld: "
                                      "folded heads", dim, scene_kind_name(kinds[f]), (long long)n);
         /* everything the context holds: work, pairs, the context itself */
         CHECK_EQ(nbs_context_bytes(ctx),
