@@ -170,6 +170,7 @@
 #include "internal.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -517,6 +518,16 @@ static inline nbs_status nbs__nbs_check_at(nbs__run *run, const nbs__nbs_axes *g
     NBS__NBS_PUSH((e), K->e[e].X, A, nbs__ix, R, top);                                        \
   } while (0)
 
+/* Asks for the links and coordinates of element k, the next of a walk of lists of elements
+ * (next, of dimension dim), while the walk takes the one before it: the walks of steps 3-4
+ * miss the cache at every element in random order, and the processor alone overlaps few
+ * of them (k may be NBS__EMPTY: a prefetch never faults). */
+#define NBS__NBS_PREFETCH(next, x, dim, k)                                                    \
+  do {                                                                                        \
+    __builtin_prefetch((next) + (k));                                                         \
+    __builtin_prefetch((x) + (ptrdiff_t)(k) * (dim));                                         \
+  } while (0)
+
 /* Empties the heads H[R[0..top-1]] that a set's lists were started at. */
 static inline void nbs__nbs_clear(int32_t *H, const int32_t *R, int32_t top) {
   for (int32_t i = 0; i < top; i++) H[R[i]] = NBS__EMPTY;
@@ -719,12 +730,14 @@ nbs__nbs_3d_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bo
       for (int w = 0; w < ways; w++) {
         if (e[w] != NBS__EMPTY) {
           const int32_t next = Z[e[w]];
+          NBS__NBS_PREFETCH(Z, x, 3, next);
           NBS__NBS_TAKE(e[w], m++, B0, RB0, nb0);
           e[w] = next;
           more = true;
         }
         if (u[w] != NBS__EMPTY) {
           const int32_t next = Z[u[w]];
+          NBS__NBS_PREFETCH(Z, x, 3, next);
           NBS__NBS_TAKE(u[w], mu--, B1, RB1, nb1);
           u[w] = next;
           more = true;
@@ -760,6 +773,7 @@ nbs__nbs_3d_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bo
         for (int w = 0; w < ways; w++) {
           if (e[w] != NBS__EMPTY) {
             const int32_t next = Z[e[w]];
+          NBS__NBS_PREFETCH(Z, x, 3, next);
             NBS__NBS_TAKE(e[w], m, B0, RB0, nb0);
             m = m + 1 == cap ? 0 : m + 1;
             len++;
@@ -883,12 +897,14 @@ nbs__nbs_2d_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bo
       for (int w = 0; w < ways; w++) {
         if (e[w] != NBS__EMPTY) {
           const int32_t next = Y[e[w]];
+          NBS__NBS_PREFETCH(Y, x, 2, next);
           NBS__NBS_TAKE2(e[w], m++, A0, RA0, na0);
           e[w] = next;
           more = true;
         }
         if (u[w] != NBS__EMPTY) {
           const int32_t next = Y[u[w]];
+          NBS__NBS_PREFETCH(Y, x, 2, next);
           NBS__NBS_TAKE2(u[w], mu--, A1, RA1, na1);
           u[w] = next;
           more = true;
@@ -924,6 +940,7 @@ nbs__nbs_2d_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bo
         for (int w = 0; w < ways; w++) {
           if (e[w] != NBS__EMPTY) {
             const int32_t next = Y[e[w]];
+          NBS__NBS_PREFETCH(Y, x, 2, next);
             NBS__NBS_TAKE2(e[w], m, A0, RA0, na0);
             m = m + 1 == cap ? 0 : m + 1;
             len++;
