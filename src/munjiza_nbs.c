@@ -61,8 +61,9 @@
  *    (nbs__nbs_block, below, says why). The lists hold the same elements in the same order;
  *    the pairs are stored under the elements' numbers. The block has as many entries M as
  *    the largest layer and the one below it hold together: step 1 counts each layer's
- *    elements (CN[nz]), and the largest sum is taken before step 2. An entry is 32 bytes, coordinates, x-link and number together, so that a candidate
- *    costs one cache line, not three;
+ *    elements (CN[nz]), and the largest sum is taken before step 2. An entry is 32 bytes,
+ *    coordinates, x-link and number together, so that a candidate costs one cache line,
+ *    not three;
  *  - 3D: chains of layers. Step 2 makes the layer of the first element of a new z-list
  *    central, as the book says; when steps 5-11 are done with it, the layer above it, if
  *    it is new and not empty, is made central next, and so on up, until a layer above is
@@ -142,6 +143,17 @@
  * (84 -> 47 ns per element with 8, one run each), but the blocks then no longer fit the
  * core's cache together and steps 5-10 lose what the walks gained (minimum of 6: 173, 175
  * and 176 ns for 2, 4 and 8 walks).
+ * Then, step by step, each against the one before (3D, interleaved, minimum of 4-6; this VM
+ * drifts by 10-20% within an hour, so the figures chain loosely): the branch-free pair
+ * store 230 -> 206 ns; 32-byte entries 190 -> 174; gathered candidates 190 -> 171; 4 z-lists
+ * per layer 193 -> 175; the tests of one element against many in one loop 167 -> 160; chains
+ * of layers 157 -> 141; 8 z-lists 139 -> 132; RC and chains of rows the same at 1e6 (129),
+ * 183 -> 168 at 1e7; prefetched walks 129 -> 119 (LAMMPS: about 195 on this machine);
+ * sorted order 128 -> 84 before the last three. 2D with the same representation: 123 -> 66,
+ * and 71 -> 63 with the prefetches. Tried and left out: an AVX-512 test of the gathered candidates
+ * (gathers of the coordinates, a compressed store: 201 against 195 for the generic loop;
+ * gathers are slow on this core), the x-list index cached in the block (135 against 132),
+ * 16 z-lists per layer (within the noise of 8).
  *
  * The work block (ctx->work, work_kind NBS__WORK_NBS) holds, as int32:
  *   [ C: w(nz+2) ] [ B0: ny+2 ] [ B1: ny+2 ] [ A0: nx+2 ] [ A1: nx+2 ] [ CN: nz+2 ]
@@ -444,14 +456,17 @@ static inline nbs_status nbs__nbs_pairs(nbs__run *run, const nbs__nbs_block *K, 
 /* Entries gathered from the neighbour lists at a time (nbs__nbs_check_cell). */
 #define NBS__NBS_GATHER 64
 
-/* The four neighbour lists are walked side by side. K->e[-1] is a sentinel whose link is NBS__EMPTY, so that a walk that has
- * ended stays ended without a branch; the entries met are gathered, up to NBS__NBS_GATHER
- * at a time, and every element of the central cell is tested against them. */
+/* The four neighbour lists are walked side by side. K->e[-1] is a sentinel whose link is
+ * NBS__EMPTY, so that a walk that has ended stays ended without a branch; the entries met
+ * are gathered, up to NBS__NBS_GATHER at a time, and every element of the central cell is
+ * tested against them. */
 static inline nbs_status nbs__nbs_check_cell(nbs__run *run, const nbs__nbs_block *K, int dim,
                                              int32_t c, const int32_t nb[4]) {
   const nbs__nbs_entry *E = K->e;
   for (int32_t a = c; a != NBS__EMPTY; a = E[a].X) {
-    for (int32_t b = E[a].X; b != NBS__EMPTY; b = E[b].X) NBS__TRY(nbs__nbs_pair(run, K, dim, a, b));
+    for (int32_t b = E[a].X; b != NBS__EMPTY; b = E[b].X) {
+      NBS__TRY(nbs__nbs_pair(run, K, dim, a, b));
+    }
   }
   int32_t b0 = nb[0], b1 = nb[1], b2 = nb[2], b3 = nb[3];
   int32_t got[NBS__NBS_GATHER];
@@ -533,7 +548,7 @@ static inline void nbs__nbs_clear(int32_t *H, const int32_t *R, int32_t top) {
   for (int32_t i = 0; i < top; i++) H[R[i]] = NBS__EMPTY;
 }
 
-/* ---- 3D (section 3.10; the numbered steps are those of the pseudocode on p. 127) ----- */
+/* ---- the detection (3D: section 3.10, steps of the pseudocode on p. 127; 2D: 3.8) ---- */
 
 /* Makes the layer block hold `need` entries (need >= 1), with radii or not, and points *K
  * into it. What it held is not kept: nothing in it is live between layers. The first block
@@ -578,22 +593,6 @@ static nbs_status nbs__nbs_block_reserve(nbs__run *run, int32_t need, nbs__nbs_b
   K->Y = (int32_t *)(void *)w;
   return NBS_OK;
 }
-
-/* Copies element k into the next entry of the block (m) and pushes that entry onto the y-list
- * of its row in the set B (record R, top): steps 3 and 4 for one element. */
-#define NBS__NBS_TAKE(k, l, B, R, top)                                                        \
-  do {                                                                                        \
-    const int32_t nbs__l = (l);                                                               \
-    const double *nbs__p = x + (size_t)(k) * 3;                                               \
-    double *nbs__q = K.e[nbs__l].x;                                                           \
-    nbs__q[0] = nbs__p[0];                                                                    \
-    nbs__q[1] = nbs__p[1];                                                                    \
-    nbs__q[2] = nbs__p[2];                                                                    \
-    if (r) K.r[nbs__l] = r[k];                                                                \
-    K.e[nbs__l].id = (k);                                                                     \
-    const int32_t nbs__iy = nbs__nbs_at(g, nbs__q, 1);                                        \
-    NBS__NBS_PUSH(nbs__l, KY[nbs__l], B, nbs__iy, R, top);                                    \
-  } while (0)
 
 /* Steps 5-11 for the central layer, whose elements and those of the layer below it are in
  * the block K, on the y-lists of sets 0 and 1 (started at the heads RB0[0..nb0-1],
@@ -659,164 +658,44 @@ nbs__nbs_3d_layer(nbs__run *run, const nbs__nbs_layout *L, const nbs__nbs_axes *
   return NBS_OK;
 }
 
-static inline __attribute__((always_inline)) nbs_status
-nbs__nbs_3d_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bool fold) {
-  axes.fold = fold;
-  const nbs__nbs_axes *g = &axes; /* a copy: the heads' stores cannot alias its masks */
-  const double *x = run->x;
-  const double *r = run->r;
-  const int32_t n = run->n;
-  int32_t *restrict C = L->C;
-  const int32_t ways = L->zways;
-  int32_t *restrict CN = L->CN;
-  int32_t *restrict B0 = L->B0;
-  int32_t *restrict B1 = L->B1;
-  int32_t *restrict Z = L->Z;
-  int32_t *restrict RB0 = L->RB0;
-  int32_t *restrict RB1 = L->RB1;
-  int32_t *restrict RC = L->RC;
-
-  /* Step 1: map every element onto its z-list (layer): Z[k] = C[iz]; C[iz] = k, the
-   * layer's list k mod w of its w. All layers are "new" (CN[iz] >= 0): CN[iz] counts the
-   * layer's elements. */
-  int32_t nc = 0; /* RC[0..nc-1]: the layers, in the order of their first elements */
-  for (int32_t k = 0; k < n; k++) {
-    const int32_t iz = nbs__nbs_cell(g, x, 3, k, 2);
-    int32_t *h = &C[ways * iz + (k & (ways - 1))];
-    Z[k] = *h;
-    *h = k;
-    RC[nc] = iz;
-    nc += CN[iz]++ == 0;
-  }
-
-  /* The layer block: as many entries as the largest layer and the one below it hold. */
-  int32_t need = 1;
-  for (int32_t i = 0; i < nc; i++) {
-    const int32_t iz = RC[i];
-    const int32_t t = CN[iz] + CN[nbs__nbs_near(g, iz, -1, 2)];
-    need = t > need ? t : need;
-  }
-  nbs__nbs_block K = {0};
-  NBS__NBS_TRY(nbs__nbs_block_reserve(run, need, &K));
-  int32_t *restrict KY = K.Y;
-
-  /* Step 2: loop over the elements; the first one in a "new" z-list makes it the central
-   * layer. The first elements of the layers, in the order of the elements, are those step 1
-   * noted in RC, so the loop runs over RC (as step 5 runs over RB0). Then the layer above
-   * it, if it is new and not empty, is the next central layer, and so on up (see "chains of
-   * layers" in the file comment): its neighbouring layer is the one just done, already in
-   * the block. */
-  const int32_t cap = need; /* the block, used as a ring */
-  for (int32_t i = 0; i < nc; i++) {
-    int32_t iz = RC[i];
-    if (CN[iz] < 0) continue;
-    CN[iz] = -1; /* mark the layer "old" */
-    const int32_t iu = nbs__nbs_near(g, iz, -1, 2);
-    int32_t e[NBS__NBS_ZWAYS], u[NBS__NBS_ZWAYS];
-    for (int w = 0; w < ways; w++) {
-      e[w] = C[ways * iz + w];
-      u[w] = C[ways * iu + w];
-    }
-
-    /* Step 3: the elements of the central layer onto the y-lists of set 0; step 4: the
-     * elements of the neighbouring layer iz-1 onto the y-lists of set 1; each copied into
-     * the block on the way, the y-lists linking its entries: the central layer's from entry
-     * 0 up, the other's from the last entry down. The walks go side by side, so that their
-     * cache misses overlap. RB0 records the rows of the central layer in the order in which
-     * this walk meets their first element. */
-    int32_t m = 0, mu = cap - 1, nb0 = 0, nb1 = 0;
-    for (bool more = true; more;) {
-      more = false;
-      for (int w = 0; w < ways; w++) {
-        if (e[w] != NBS__EMPTY) {
-          const int32_t next = Z[e[w]];
-          NBS__NBS_PREFETCH(Z, x, 3, next);
-          NBS__NBS_TAKE(e[w], m++, B0, RB0, nb0);
-          e[w] = next;
-          more = true;
-        }
-        if (u[w] != NBS__EMPTY) {
-          const int32_t next = Z[u[w]];
-          NBS__NBS_PREFETCH(Z, x, 3, next);
-          NBS__NBS_TAKE(u[w], mu--, B1, RB1, nb1);
-          u[w] = next;
-          more = true;
-        }
-      }
-    }
-    /* Steps 5-11 over the block. */
-    NBS__NBS_TRY(nbs__nbs_3d_layer(run, L, g, &K, nb0, nb1));
-
-    /* The central layer's entries are the ring's [s, s + len) (mod cap). */
-    int32_t s = 0, len = m;
-    for (;;) {
-      const int32_t iv = nbs__nbs_near(g, iz, 1, 2);
-      if (CN[iv] <= 0) break; /* empty or old: the chain ends */
-      iz = iv;
-      CN[iz] = -1; /* mark the layer "old" */
-      nb0 = nb1 = 0;
-      /* Step 4 for the layer just done, now the neighbouring one: its entries onto the
-       * y-lists of set 1, in the order they were taken. */
-      for (int32_t j = 0, l = s; j < len; j++) {
-        const int32_t iy = nbs__nbs_at(g, K.e[l].x, 1);
-        NBS__NBS_PUSH(l, KY[l], B1, iy, RB1, nb1);
-        l = l + 1 == cap ? 0 : l + 1;
-      }
-      /* Step 3: the new central layer's elements into the ring after them. */
-      s = s + len;
-      s = s >= cap ? s - cap : s;
-      m = s;
-      len = 0;
-      for (int w = 0; w < ways; w++) e[w] = C[ways * iz + w];
-      for (bool more = true; more;) {
-        more = false;
-        for (int w = 0; w < ways; w++) {
-          if (e[w] != NBS__EMPTY) {
-            const int32_t next = Z[e[w]];
-          NBS__NBS_PREFETCH(Z, x, 3, next);
-            NBS__NBS_TAKE(e[w], m, B0, RB0, nb0);
-            m = m + 1 == cap ? 0 : m + 1;
-            len++;
-            e[w] = next;
-            more = true;
-          }
-        }
-      }
-      NBS__NBS_TRY(nbs__nbs_3d_layer(run, L, g, &K, nb0, nb1));
-    }
-  }
-
-  /* Finally remove the z-lists (and their counts): reset the heads of the layers step 1
-   * noted. */
-  for (int32_t i = 0; i < nc; i++) {
-    const int32_t iz = RC[i];
-    for (int w = 0; w < ways; w++) C[ways * iz + w] = NBS__EMPTY;
-    CN[iz] = 0;
-  }
-  return NBS_OK;
+/* Copies element k into entry l of the block and pushes that entry onto the list of its
+ * cell one level down in the set H (record R, top): steps 3 and 4 for one element in 3D
+ * (the y-lists, linked by K->Y), in 2D the x-lists of section 3.8 (linked by the entries'
+ * X). dim is a constant at every call. */
+static inline __attribute__((always_inline)) void
+nbs__nbs_take(const nbs__run *run, const nbs__nbs_axes *g, const nbs__nbs_block *K, int dim,
+              int32_t k, int32_t l, int32_t *H, int32_t *R, int32_t *top) {
+  const double *p = run->x + (size_t)k * (size_t)dim;
+  nbs__nbs_entry *q = &K->e[l];
+  q->x[0] = p[0];
+  q->x[1] = p[1];
+  if (dim == 3) q->x[2] = p[2];
+  if (run->r) K->r[l] = run->r[k];
+  q->id = k;
+  const int32_t i = nbs__nbs_at(g, q->x, dim == 3 ? 1 : 0);
+  NBS__NBS_PUSH(l, *(dim == 3 ? &K->Y[l] : &q->X), H, i, R, *top);
 }
 
-static nbs_status nbs__nbs_3d(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes) {
-  return axes.fold ? nbs__nbs_3d_body(run, L, axes, true) : nbs__nbs_3d_body(run, L, axes, false);
+/* One step of a walk of an elements' list (linked by Z), at element *e: asks for the next
+ * one (NBS__NBS_PREFETCH), takes *e into entry l (nbs__nbs_take) and moves *e on. */
+static inline __attribute__((always_inline)) void
+nbs__nbs_step(const nbs__run *run, const nbs__nbs_axes *g, const nbs__nbs_block *K, int dim,
+              const int32_t *Z, int32_t *e, int32_t l, int32_t *H, int32_t *R, int32_t *top) {
+  const int32_t next = Z[*e];
+  NBS__NBS_PREFETCH(Z, run->x, dim, next);
+  nbs__nbs_take(run, g, K, dim, *e, l, H, R, top);
+  *e = next;
 }
 
-/* ---- 2D (section 3.8) ---------------------------------------------------------------- */
-
-/* Copies element k into entry l of the block and pushes that entry onto the x-list of its
- * cell in the set A (record R, top): the 2D analogue of NBS__NBS_TAKE, one level down (a
- * row's elements go straight onto x-lists). */
-#define NBS__NBS_TAKE2(k, l, A, R, top)                                                       \
-  do {                                                                                        \
-    const int32_t nbs__l = (l);                                                               \
-    const double *nbs__p = x + (size_t)(k) * 2;                                               \
-    nbs__nbs_entry *nbs__q = &K.e[nbs__l];                                                    \
-    nbs__q->x[0] = nbs__p[0];                                                                 \
-    nbs__q->x[1] = nbs__p[1];                                                                 \
-    if (r) K.r[nbs__l] = r[k];                                                                \
-    nbs__q->id = (k);                                                                         \
-    const int32_t nbs__ix = nbs__nbs_at(g, nbs__q->x, 0);                                     \
-    NBS__NBS_PUSH(nbs__l, nbs__q->X, A, nbs__ix, R, top);                                     \
-  } while (0)
+/* The same for an entry already in the block (a layer or row just done, now the
+ * neighbouring one of the next). */
+static inline __attribute__((always_inline)) void
+nbs__nbs_retake(const nbs__nbs_axes *g, const nbs__nbs_block *K, int dim, int32_t l, int32_t *H,
+                int32_t *R, int32_t *top) {
+  nbs__nbs_entry *q = &K->e[l];
+  const int32_t i = nbs__nbs_at(g, q->x, dim == 3 ? 1 : 0);
+  NBS__NBS_PUSH(l, *(dim == 3 ? &K->Y[l] : &q->X), H, i, R, *top);
+}
 
 /* The loop over the central row, whose entries are the ring's [s, s + len) (mod cap): the
  * first element in a "new" cell makes it the central cell (nbs__nbs_check_at). */
@@ -830,150 +709,164 @@ static inline nbs_status nbs__nbs_2d_row(nbs__run *run, const nbs__nbs_axes *g,
   return NBS_OK;
 }
 
-/* Section 3.8 with the same representation as 3D's (see the file comment): the y-lists
- * (one per row, kept as w lists) link the elements; the central row and the row below it
- * are copied into the block as they are walked, straight onto the x-lists of sets 0 and 1,
- * and rows chain upwards as 3D's layers do. */
+/* The central layer (3D: steps 5-11, nbs__nbs_3d_layer, which finds its rows through RB0)
+ * or row (2D: its entries are the ring's [s, s + len), mod cap; then the removal of the
+ * x-lists), with the layer or row below it, on the lists of sets 0 and 1 started at n0 and
+ * n1 heads. */
 static inline __attribute__((always_inline)) nbs_status
-nbs__nbs_2d_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bool fold) {
+nbs__nbs_central(nbs__run *run, const nbs__nbs_layout *L, const nbs__nbs_axes *g,
+                 const nbs__nbs_block *K, int dim, int32_t s, int32_t len, int32_t cap,
+                 int32_t n0, int32_t n1) {
+  if (dim == 3) return nbs__nbs_3d_layer(run, L, g, K, n0, n1);
+  NBS__TRY(nbs__nbs_2d_row(run, g, K, L->A0, L->A1, s, len, cap));
+  nbs__nbs_clear(L->A0, L->RA0, n0);
+  nbs__nbs_clear(L->A1, L->RA1, n1);
+  return NBS_OK;
+}
+
+/* Both dimensions (3D: section 3.10, the numbered steps those of the pseudocode on p. 127;
+ * 2D: section 3.8 one level shorter). The lists of the elements are the z-lists of the
+ * layers in 3D (C, Z) and the y-lists of the rows in 2D (B, Y); the level below them is the
+ * y-lists of a layer in 3D (B0, B1, records RB0, RB1) and the x-lists of a row in 2D (A0,
+ * A1, records RA0, RA1). Each of the elements' lists is kept as w lists (see the file
+ * comment), the central one and the one below it are copied into the block as they are
+ * walked, and the central ones chain upwards. dim is a constant in each compiled copy. */
+static inline __attribute__((always_inline)) nbs_status
+nbs__nbs_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bool fold, int dim) {
   axes.fold = fold;
   const nbs__nbs_axes *g = &axes; /* a copy: the heads' stores cannot alias its masks */
+  const int a = dim - 1; /* the axis of the elements' lists */
   const double *x = run->x;
-  const double *r = run->r;
   const int32_t n = run->n;
-  int32_t *restrict B = L->B0;
+  int32_t *restrict C = dim == 3 ? L->C : L->B0;
+  int32_t *restrict Z = dim == 3 ? L->Z : L->Y;
   const int32_t ways = L->zways;
   int32_t *restrict CN = L->CN;
   int32_t *restrict RC = L->RC;
-  int32_t *restrict Y = L->Y;
-  int32_t *restrict A0 = L->A0;
-  int32_t *restrict A1 = L->A1;
-  int32_t *restrict RA0 = L->RA0;
-  int32_t *restrict RA1 = L->RA1;
+  int32_t *H0 = dim == 3 ? L->B0 : L->A0, *H1 = dim == 3 ? L->B1 : L->A1;
+  int32_t *R0 = dim == 3 ? L->RB0 : L->RA0, *R1 = dim == 3 ? L->RB1 : L->RA1;
 
-  /* Mapping onto rows: integerise y and push each element on its y-list (the book's
-   * eqs. 3.34-3.35 with one coordinate): Y[k] = B[iy]; B[iy] = k, the row's list k mod w of
-   * its w. CN[iy] counts the row's elements; RC notes each row at its first element. */
-  int32_t nc = 0;
+  /* Step 1: map every element onto its z-list (layer; in 2D its y-list, row): Z[k] = C[iz];
+   * C[iz] = k, the layer's list k mod w of its w. All layers are "new" (CN[iz] >= 0):
+   * CN[iz] counts the layer's elements, and RC notes each layer at its first element. */
+  int32_t nc = 0; /* RC[0..nc-1]: the layers, in the order of their first elements */
   for (int32_t k = 0; k < n; k++) {
-    const int32_t iy = nbs__nbs_cell(g, x, 2, k, 1);
-    int32_t *h = &B[ways * iy + (k & (ways - 1))];
-    Y[k] = *h;
+    const int32_t iz = nbs__nbs_cell(g, x, dim, k, a);
+    int32_t *h = &C[ways * iz + (k & (ways - 1))];
+    Z[k] = *h;
     *h = k;
-    RC[nc] = iy;
-    nc += CN[iy]++ == 0;
+    RC[nc] = iz;
+    nc += CN[iz]++ == 0;
   }
 
-  /* The block: as many entries as the largest row and the one below it hold. */
+  /* The block: as many entries as the largest layer and the one below it hold. */
   int32_t need = 1;
   for (int32_t i = 0; i < nc; i++) {
-    const int32_t iy = RC[i];
-    const int32_t t = CN[iy] + CN[nbs__nbs_near(g, iy, -1, 1)];
+    const int32_t iz = RC[i];
+    const int32_t t = CN[iz] + CN[nbs__nbs_near(g, iz, -1, a)];
     need = t > need ? t : need;
   }
   nbs__nbs_block K = {0};
   NBS__NBS_TRY(nbs__nbs_block_reserve(run, need, &K));
-  const nbs__nbs_block *Kp = &K;
 
-  /* Loop over the elements (over RC: the rows in the order of their first elements): the
-   * first element found in a "new" row makes it the central row; then the row above it,
-   * while new and not empty. */
+  /* Step 2: loop over the elements; the first one in a "new" z-list makes it the central
+   * layer. The first elements of the layers, in the order of the elements, are those step 1
+   * noted in RC, so the loop runs over RC (as step 5 runs over RB0). Then the layer above
+   * it, if it is new and not empty, is the next central layer, and so on up (see "chains of
+   * layers" in the file comment): its neighbouring layer is the one just done, already in
+   * the block. */
   const int32_t cap = need; /* the block, used as a ring */
   for (int32_t i = 0; i < nc; i++) {
-    int32_t iy = RC[i];
-    if (CN[iy] < 0) continue;
-    CN[iy] = -1; /* mark the row "old" */
-    const int32_t iu = nbs__nbs_near(g, iy, -1, 1);
+    int32_t iz = RC[i];
+    if (CN[iz] < 0) continue;
+    CN[iz] = -1; /* mark the layer "old" */
+    const int32_t iu = nbs__nbs_near(g, iz, -1, a);
     int32_t e[NBS__NBS_ZWAYS], u[NBS__NBS_ZWAYS];
     for (int w = 0; w < ways; w++) {
-      e[w] = B[ways * iy + w];
-      u[w] = B[ways * iu + w];
+      e[w] = C[ways * iz + w];
+      u[w] = C[ways * iu + w];
     }
-    /* x-lists of set 0: the elements of the central row iy (entries from 0 up); of set 1:
-     * those of row iy-1 (entries from the last down); walked side by side. */
-    int32_t m = 0, mu = cap - 1, na0 = 0, na1 = 0;
+
+    /* Step 3: the elements of the central layer onto the lists of set 0; step 4: the
+     * elements of the neighbouring layer iz-1 onto the lists of set 1; each copied into the
+     * block on the way, the central layer's from entry 0 up, the other's from the last entry
+     * down. The walks go side by side, so that their cache misses overlap. R0 records the
+     * lists of the central layer in the order in which this walk meets their first
+     * element. */
+    int32_t m = 0, mu = cap - 1, n0 = 0, n1 = 0;
     for (bool more = true; more;) {
       more = false;
       for (int w = 0; w < ways; w++) {
         if (e[w] != NBS__EMPTY) {
-          const int32_t next = Y[e[w]];
-          NBS__NBS_PREFETCH(Y, x, 2, next);
-          NBS__NBS_TAKE2(e[w], m++, A0, RA0, na0);
-          e[w] = next;
+          nbs__nbs_step(run, g, &K, dim, Z, &e[w], m++, H0, R0, &n0);
           more = true;
         }
         if (u[w] != NBS__EMPTY) {
-          const int32_t next = Y[u[w]];
-          NBS__NBS_PREFETCH(Y, x, 2, next);
-          NBS__NBS_TAKE2(u[w], mu--, A1, RA1, na1);
-          u[w] = next;
+          nbs__nbs_step(run, g, &K, dim, Z, &u[w], mu--, H1, R1, &n1);
           more = true;
         }
       }
     }
-    NBS__NBS_TRY(nbs__nbs_2d_row(run, g, Kp, A0, A1, 0, m, cap));
-    /* Removal of the x-lists: reset the heads the two rows started. */
-    nbs__nbs_clear(A0, RA0, na0);
-    nbs__nbs_clear(A1, RA1, na1);
+    /* Steps 5-11 over the block. */
+    NBS__NBS_TRY(nbs__nbs_central(run, L, g, &K, dim, 0, m, cap, n0, n1));
 
-    int32_t s = 0, len = m; /* the central row's entries */
+    /* The central layer's entries are the ring's [s, s + len) (mod cap). */
+    int32_t s = 0, len = m;
     for (;;) {
-      const int32_t iv = nbs__nbs_near(g, iy, 1, 1);
+      const int32_t iv = nbs__nbs_near(g, iz, 1, a);
       if (CN[iv] <= 0) break; /* empty or old: the chain ends */
-      iy = iv;
-      CN[iy] = -1; /* mark the row "old" */
-      na0 = na1 = 0;
-      /* the row just done, now the row below: its entries onto the x-lists of set 1 */
+      iz = iv;
+      CN[iz] = -1; /* mark the layer "old" */
+      n0 = n1 = 0;
+      /* Step 4 for the layer just done, now the neighbouring one: its entries onto the
+       * lists of set 1, in the order they were taken. */
       for (int32_t j = 0, l = s; j < len; j++) {
-        const int32_t ix = nbs__nbs_at(g, K.e[l].x, 0);
-        NBS__NBS_PUSH(l, K.e[l].X, A1, ix, RA1, na1);
+        nbs__nbs_retake(g, &K, dim, l, H1, R1, &n1);
         l = l + 1 == cap ? 0 : l + 1;
       }
-      /* the new central row's elements into the ring after them, onto set 0 */
+      /* Step 3: the new central layer's elements into the ring after them. */
       s = s + len;
       s = s >= cap ? s - cap : s;
       m = s;
       len = 0;
-      for (int w = 0; w < ways; w++) e[w] = B[ways * iy + w];
+      for (int w = 0; w < ways; w++) e[w] = C[ways * iz + w];
       for (bool more = true; more;) {
         more = false;
         for (int w = 0; w < ways; w++) {
           if (e[w] != NBS__EMPTY) {
-            const int32_t next = Y[e[w]];
-          NBS__NBS_PREFETCH(Y, x, 2, next);
-            NBS__NBS_TAKE2(e[w], m, A0, RA0, na0);
+            nbs__nbs_step(run, g, &K, dim, Z, &e[w], m, H0, R0, &n0);
             m = m + 1 == cap ? 0 : m + 1;
             len++;
-            e[w] = next;
             more = true;
           }
         }
       }
-      NBS__NBS_TRY(nbs__nbs_2d_row(run, g, Kp, A0, A1, s, len, cap));
-      nbs__nbs_clear(A0, RA0, na0);
-      nbs__nbs_clear(A1, RA1, na1);
+      NBS__NBS_TRY(nbs__nbs_central(run, L, g, &K, dim, s, len, cap, n0, n1));
     }
   }
 
-  /* Removal of the y-lists (and their counts): reset the heads of the rows noted in RC. */
+  /* Finally remove the z-lists (and their counts): reset the heads of the layers step 1
+   * noted. */
   for (int32_t i = 0; i < nc; i++) {
-    const int32_t iy = RC[i];
-    for (int w = 0; w < ways; w++) B[ways * iy + w] = NBS__EMPTY;
-    CN[iy] = 0;
+    const int32_t iz = RC[i];
+    for (int w = 0; w < ways; w++) C[ways * iz + w] = NBS__EMPTY;
+    CN[iz] = 0;
   }
   return NBS_OK;
 }
 
-/* 2D with an axis folded or not: two copies, so that an unfolded grid does its index
- * arithmetic exactly as before folding existed. */
-static nbs_status nbs__nbs_2d(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes) {
-  return axes.fold ? nbs__nbs_2d_body(run, L, axes, true) : nbs__nbs_2d_body(run, L, axes, false);
+/* Each dimension with an axis folded or not: four copies, so that an unfolded grid does its
+ * index arithmetic exactly as before folding existed. */
+static nbs_status nbs__nbs_3d(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes) {
+  return axes.fold ? nbs__nbs_body(run, L, axes, true, 3) : nbs__nbs_body(run, L, axes, false, 3);
 }
 
-#undef NBS__NBS_TAKE2
+static nbs_status nbs__nbs_2d(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes) {
+  return axes.fold ? nbs__nbs_body(run, L, axes, true, 2) : nbs__nbs_body(run, L, axes, false, 2);
+}
+
 #undef NBS__NBS_PUSH
 #undef NBS__NBS_PUSH_X
-#undef NBS__NBS_TAKE
 #undef NBS__NBS_TRY
 
 /* ---- the dispatcher ------------------------------------------------------------------ */
