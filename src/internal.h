@@ -182,15 +182,20 @@ nbs_status nbs__flush(nbs__run *run);
  * batch smaller than need, or max_pairs in reach): then emit pair by pair. */
 nbs_status nbs__room(nbs__run *run, size_t need, bool *room);
 
+/* The pair of elements a and b as reported: (i, j) with i < j. */
+static inline nbs_pair nbs__pair_of(int32_t a, int32_t b) {
+  nbs_pair p;
+  p.i = a < b ? a : b;
+  p.j = a < b ? b : a;
+  return p;
+}
+
 static inline nbs_status nbs__emit(nbs__run *run, int32_t a, int32_t b) {
   if (run->count == run->cap) {
     nbs_status s = nbs__flush(run);
     if (s != NBS_OK) return s;
   }
-  nbs_pair p;
-  p.i = a < b ? a : b;
-  p.j = a < b ? b : a;
-  run->buf[run->count++] = p;
+  run->buf[run->count++] = nbs__pair_of(a, b);
   run->emitted++;
   return NBS_OK;
 }

@@ -20,11 +20,11 @@
  * A list is found non-empty by looping over the elements of the list one level up, never by
  * looping over cells, and each list is removed by resetting only the heads the elements that
  * built it touched. Time is therefore proportional to N whatever the packing density and the
- * extent of the domain (eqs. 3.63-3.64), and memory is ny + 2nx + 2N integers in 2D
- * (eq. 3.65). In 3D it is w nz + 2ny + 2nx + N integers (w <= 8 z-lists per layer, with
- * w nz <= N / 64) and a layer block of M <= N entries of 36 bytes (below) where eq. 3.80
- * has nz + 2ny + 2nx + 3N integers, plus, in both, the records described below (2nx in 2D,
- * nz + 2ny + 2nx in 3D) and in 3D nz layer counts.
+ * extent of the domain (eqs. 3.63-3.64). Memory is w ny + 2nx + N integers in 2D and
+ * w nz + 2ny + 2nx + N in 3D (w <= 8 lists per row or layer, with w ny, w nz <= N / 64),
+ * and a block of M <= N entries of 32 bytes in 2D, 36 in 3D (below), where eq. 3.65 has
+ * ny + 2nx + 2N integers and eq. 3.80 nz + 2ny + 2nx + 3N; plus the records described
+ * below (ny + 2nx in 2D, nz + 2ny + 2nx in 3D) and a count per row (2D) or layer (3D).
  *
  * Deviations from the book's text, all of them representation only:
  *  - 0-based element indices, and the end of a list is NBS__EMPTY (-1);
@@ -32,34 +32,35 @@
  *    stored at index i + 1 and i - 1, i + 1 are always valid indices;
  *  - a list is marked "old" by storing -2 - head (nbs__mark) instead of adding 2N, which
  *    would overflow int32 for large N; a marked head read as a neighbour goes through
- *    nbs__unmark. Lists of set 1 are never marked. A layer (3D), whose z-list is w heads,
- *    is marked in its count instead: CN[iz] = -1 once its elements are counted (step 2);
- *  - records of started heads (RB0, RB1 of at most ny entries, RA0, RA1 of at most nx, RC
- *    of at most nz): a push that starts a list (its head was empty) also notes the head's
- *    index. The removal of a set of lists (3D steps 9, 10, 11 and the z-lists; the 2D
- *    removal of x-lists) resets the heads its record names instead of walking the lists or
- *    the elements a second time to recompute them (the same heads: exactly those the
- *    elements touched). In 3D, step 5's loop over the central layer, which finds each row
- *    "new" at its first element in layer order, runs over RB0: step 3 walks the same layer
- *    in the same order and notes each row at the same first element, so the central rows
- *    come in the book's order without a second walk of the layer (the rows are still found
- *    by the loop over the elements of the layer, step 3's). Likewise step 2's loop over the
- *    elements runs over RC, the layers in the order step 1 met their first elements, and
- *    so does the pass that sizes the layer block: one pass over the coordinates (step 1)
- *    where there were four;
+ *    nbs__unmark. Lists of set 1 are never marked. A layer (3D) or row (2D), whose list is
+ *    w heads, is marked in its count instead: CN[iz] = -1 once its elements are counted;
+ *  - records of started heads (RB0, RB1 of at most ny entries, RA0, RA1 of at most nx, RC of at
+ *    most nz, or ny in 2D): a push that starts a list (its head was empty) also notes the head's
+ *    index. The removal of a set of lists (3D steps 9, 10, 11 and the z-lists; the 2D removal of
+ *    x-lists) resets the heads its record names instead of walking the lists or the elements a
+ *    second time to recompute them (the same heads: exactly those the elements touched). In 3D,
+ *    step 5's loop over the central layer, which finds each row "new" at its first element in layer
+ *    order, runs over RB0: step 3 walks the same layer in the same order and notes each row at the
+ *    same first element, so the central rows come in the book's order without a second walk of the
+ *    layer (the rows are still found by the loop over the elements of the layer, step 3's).
+ *    Likewise step 2's loop over the elements runs over RC, the layers in the order step 1 met
+ *    their first elements, and so does the pass that sizes the layer block: one pass over the
+ *    coordinates (step 1) where there were four;
  *  - walks of independent lists go side by side (2D: the central row and the row below it;
  *    3D: steps 3 and 4, and the four neighbour lists of a central cell). In random element
  *    order every step of a list is a cache miss; walked side by side the misses overlap;
- *  - 3D: a layer's z-list is kept as w lists (nbs__nbs_zways: 8 where their heads stay
- *    within N / 64 ints, fewer where there are many layers), element k on list k mod w, so
- *    that steps 3 and 4 walk 8 lists side by side where the book's one list would be walked
- *    a cache miss at a time. The layer's elements are the union of its lists; only the
- *    order in which the y-lists receive them changes, and with it the order of the pairs;
+ *  - a layer's z-list (2D: a row's y-list) is kept as w lists (nbs__nbs_zways: 8 where
+ *    their heads stay within N / 64 ints, fewer where there are many layers), element k on
+ *    list k mod w, so that steps 3 and 4 walk 8 lists side by side where the book's one
+ *    list would be walked a cache miss at a time. The layer's elements are the union of its
+ *    lists; only the order in which the y-lists receive them changes, and with it the order
+ *    of the pairs (which this and the chains and gathered candidates below make differ from
+ *    the book's plain rendering, the same from run to run);
  *  - 3D: the layer block. Steps 3 and 4 copy each element they meet (coordinates, radius,
  *    number) into the next entry of a block that holds the central layer and the layer
  *    below it, and the y- and x-lists link entries of the block instead of elements
- *    (nbs__nbs_block, below, says why). The lists hold the same elements in the same order;
- *    the pairs are stored under the elements' numbers. The block has as many entries M as
+ *    (nbs__nbs_block, below, says why). The lists hold the same elements; the pairs are
+ *    stored under the elements' numbers. The block has as many entries M as
  *    the largest layer and the one below it hold together: step 1 counts each layer's
  *    elements (CN[nz]), and the largest sum is taken before step 2. An entry is 32 bytes,
  *    coordinates, x-link and number together, so that a candidate costs one cache line,
@@ -77,13 +78,13 @@
  *    halves them: a uniform scene is one or two chains. Rows chain the same way in step 5:
  *    after a central row, the row above it, if new and not empty, so that the rows two
  *    central rows share are still in the core's cache (at N = 1e7 a layer block is 3 MB);
- *  - 2D, the same representation one level down: the y-lists are kept as w lists per row
- *    and counted (CN[ny], RC), the central row and the row below it are copied into a
- *    block as they are walked, straight onto the x-lists of sets 0 and 1 (whose links are
- *    the entries'; no X[N]), the central row is the ring's range it was copied to, and
- *    rows chain upwards as layers do. Memory: ny + 2nx + N ints and the block, where eq.
- *    3.65 has 2N; measured (N = 1e6, random order, interleaved, min of 3) 123 -> 66 ns per
- *    element, sorted 57 -> 44, work bytes 8.03 -> 4.13 MB;
+ *  - 2D, the same representation one level down (one body, nbs__nbs_body, runs both): the y-lists
+ *    are kept as w lists per row and counted (CN[ny], RC), the central row and the row below it are
+ *    copied into a block (entries without a y-link) as they are walked, straight onto the x-lists
+ *    of sets 0 and 1 (whose links are the entries'; no X[N]), the central row is the ring's range
+ *    it was copied to, and rows chain upwards as layers do. Memory: ny + 2nx + N ints and the
+ *    block, where eq. 3.65 has 2N; measured (N = 1e6, random order, interleaved, min of 3) 123 ->
+ *    66 ns per element, sorted 57 -> 44, work bytes 8.03 -> 4.13 MB;
  *  - both: the candidates of a central cell. The four neighbour lists are walked side by side
  *    (an entry before the block's first, its sentinel, links to NBS__EMPTY, so that an
  *    ended walk stays ended without a branch); the entries met are gathered, and each
@@ -159,19 +160,19 @@
  *   [ C: w(nz+2) ] [ B0: ny+2 ] [ B1: ny+2 ] [ A0: nx+2 ] [ A1: nx+2 ] [ CN: nz+2 ]
  *   [ RC: nz+1 ] [ RB0: ny+1 ] [ RB1: ny+1 ] [ RA0: nx+1 ] [ RA1: nx+1 ] [ Z: N ]
  * in 3D, and in 2D
- *   [ B: ny+2 ] [ A0: nx+2 ] [ A1: nx+2 ] [ RA0: nx+1 ] [ RA1: nx+1 ] [ Y: N ] [ X: N ]
- * that is 4 (N + (w + 2) nz + 4ny + 4nx + 15 + 2w) bytes in 3D (w = nbs__nbs_zways(nz, N))
- * and 4 (2N + ny + 4nx + 8) in 2D: eqs. 3.80 (without Y and X) and 3.65, the records, the
- * counts and the padding (a record has one spare entry, written and not counted by a push
- * that starts no list). nx, ny, nz, N here
- * are the capacities ctx->work_cap[0], [1], [2], [3]: exactly the lists per axis (the grid's
- * cells, or fewer on a folded axis) and N of the first
- * detection, grown later only when a detection needs more (axes then get 1/8 slack, within
- * the cell budget). work_cap[2] is 0 for the 2D layout (a 3D grid always has nz >= 1), which
- * is how the dimension is encoded. The layer block is its own allocation (ctx->nbs_block),
- * of exactly M entries and the sentinel the first time and grown with 1/8 slack when a
- * later detection needs more; nothing in it outlives a detection but the sentinel, which
- * is written at every detection.
+ *   [ B: w(ny+2) ] [ A0: nx+2 ] [ A1: nx+2 ] [ CN: ny+2 ] [ RC: ny+1 ] [ RA0: nx+1 ]
+ *   [ RA1: nx+1 ] [ Y: N ]
+ * that is 4 (N + (w + 2) nz + 4ny + 4nx + 15 + 2w) bytes in 3D (w = nbs__nbs_zways(nz, N)) and 4 (N
+ * + (w + 2) ny + 4nx + 9 + 2w) in 2D (w = nbs__nbs_zways(ny, N)): eqs. 3.80 and 3.65 without the
+ * links the block holds, the records, the counts and the padding (a record has one spare entry,
+ * written and not counted by a push that starts no list). nx, ny, nz, N here are the capacities
+ * ctx->work_cap[0], [1], [2], [3]: exactly the lists per axis (the grid's cells, or fewer on a
+ * folded axis) and N of the first detection, grown later only when a detection needs more (axes
+ * then get 1/8 slack, within the cell budget). work_cap[2] is 0 for the 2D layout (a 3D grid always
+ * has nz >= 1), which is how the dimension is encoded. The layer block is its own allocation
+ * (ctx->nbs_block), of exactly M entries and the sentinel the first time and grown with 1/8 slack
+ * when a later detection needs more; nothing in it outlives a detection but the sentinel, which is
+ * written at every detection.
  * All heads are contiguous at the start, and between detections every head is NBS__EMPTY
  * and every count 0 (the book's step 0, done once when the layout is created); the next
  * arrays, the records and the block need no initialisation because an entry is always
@@ -348,13 +349,13 @@ static nbs_status nbs__nbs_abort(nbs__run *run, nbs_status s) {
   return s;
 }
 
-/* NBS's layer block (3D). When a layer becomes central, steps 3 and 4 walk its z-list and
- * that of the layer below it; every element they meet is copied, in the order met, into the
- * block: its coordinates (and radius), its number, and room for its y- and x-list links.
- * Steps 5-11 then build and walk the y- and x-lists over block entries instead of element
- * numbers, and the pairs are stored under the elements' numbers (id). Each list receives
- * the same elements in the same order as in the book's text, so the pairs come out in the
- * same order: this is representation only.
+/* NBS's block (3D: the layer block; 2D: the same for rows). When a layer becomes central,
+ * steps 3 and 4 walk its z-list and that of the layer below it; every element they meet is
+ * copied, in the order met, into the block: its coordinates (and radius), its number, and
+ * room for its x-list link and, in 3D, its y-list link. Steps 5-11 then build and walk the
+ * y- and x-lists over block entries instead of element numbers, and the pairs are stored
+ * under the elements' numbers (id). Each list receives the same elements as in the book's
+ * text: this is representation only.
  *
  * Why: in random element order the elements of a layer are scattered over all N, and steps
  * 5-10 visit each of them many times: five rows put it on x-lists (its own and, as a
@@ -376,12 +377,13 @@ typedef struct nbs__nbs_entry {
 typedef struct nbs__nbs_block {
   nbs__nbs_entry *e; /* the entries */
   double *r;         /* a radius per entry, or NULL */
-  int32_t *Y;        /* the entry's link in the y-lists */
+  int32_t *Y;        /* the entry's link in the y-lists (3D; NULL in 2D) */
 } nbs__nbs_block;
 
-/* Bytes of one entry of the layer block. */
-static size_t nbs__nbs_entry_bytes(bool radii) {
-  return sizeof(nbs__nbs_entry) + (radii ? sizeof(double) : 0) + sizeof(int32_t);
+/* Bytes of one entry of the block: the entry, its radius, and in 3D its y-link. */
+static size_t nbs__nbs_entry_bytes(int dim, bool radii) {
+  return sizeof(nbs__nbs_entry) + (radii ? sizeof(double) : 0) +
+         (dim == 3 ? sizeof(int32_t) : 0);
 }
 
 /* Checks the central cell, whose x-list (set 0, linked by the entries' X) starts at c,
@@ -410,11 +412,7 @@ static inline nbs_status nbs__nbs_pair(nbs__run *run, const nbs__nbs_block *K, i
     const bool t = nbs__touch_at(ea->x, eb->x, dim, r, r ? K->r[a] : 0, r ? K->r[b] : 0, run->d2);
     /* a full buffer is flushed (or found at max_pairs) only for a pair that touches */
     if (run->count == run->cap) return t ? nbs__emit(run, ea->id, eb->id) : NBS_OK;
-    const int32_t ia = ea->id, ib = eb->id;
-    nbs_pair p;
-    p.i = ia < ib ? ia : ib;
-    p.j = ia < ib ? ib : ia;
-    run->buf[run->count] = p;
+    run->buf[run->count] = nbs__pair_of(ea->id, eb->id);
     run->count += t;
     run->emitted += t;
     return NBS_OK;
@@ -440,11 +438,7 @@ static inline nbs_status nbs__nbs_pairs(nbs__run *run, const nbs__nbs_block *K, 
     const int32_t b = got[j];
     const nbs__nbs_entry *eb = &K->e[b];
     const bool t = nbs__touch_at(ea->x, eb->x, dim, kr != NULL, kr ? kr[a] : 0, kr ? kr[b] : 0, d2);
-    const int32_t ia = ea->id, ib = eb->id;
-    nbs_pair p;
-    p.i = ia < ib ? ia : ib;
-    p.j = ia < ib ? ib : ia;
-    out[kept] = p;
+    out[kept] = nbs__pair_of(ea->id, eb->id);
     kept += t;
   }
   run->count += kept;
@@ -533,13 +527,13 @@ static inline nbs_status nbs__nbs_check_at(nbs__run *run, const nbs__nbs_axes *g
     NBS__NBS_PUSH((e), K->e[e].X, A, nbs__ix, R, top);                                        \
   } while (0)
 
-/* Asks for the links and coordinates of element k, the next of a walk of lists of elements
- * (next, of dimension dim), while the walk takes the one before it: the walks of steps 3-4
- * miss the cache at every element in random order, and the processor alone overlaps few
- * of them (k may be NBS__EMPTY: a prefetch never faults). */
-#define NBS__NBS_PREFETCH(next, x, dim, k)                                                    \
+/* Asks for the link (in `links`) and the coordinates (dim in x) of element k, the next of a
+ * walk of the elements' lists, while the walk takes the one before it: the walks of steps
+ * 3-4 miss the cache at every element in random order, and the processor alone overlaps
+ * few of them (k may be NBS__EMPTY: a prefetch never faults). */
+#define NBS__NBS_PREFETCH(links, x, dim, k)                                                   \
   do {                                                                                        \
-    __builtin_prefetch((next) + (k));                                                         \
+    __builtin_prefetch((links) + (k));                                                        \
     __builtin_prefetch((x) + (ptrdiff_t)(k) * (dim));                                         \
   } while (0)
 
@@ -557,7 +551,7 @@ static inline void nbs__nbs_clear(int32_t *H, const int32_t *R, int32_t top) {
 static nbs_status nbs__nbs_block_reserve(nbs__run *run, int32_t need, nbs__nbs_block *K) {
   nbs_context *ctx = run->ctx;
   const bool radii = run->r != NULL;
-  const size_t entry = nbs__nbs_entry_bytes(radii);
+  const size_t entry = nbs__nbs_entry_bytes(run->dim, radii);
   /* need and the capacity grown from it are at most N, and the sentinel is one more */
   if ((uint64_t)run->n + 1 > SIZE_MAX / entry) {
     return nbs__fail(ctx, NBS_ERR_NOMEM, -1,
@@ -590,7 +584,47 @@ static nbs_status nbs__nbs_block_reserve(nbs__run *run, int32_t need, nbs__nbs_b
     K->r = (double *)(void *)w;
     w += (size_t)need * sizeof(double);
   }
-  K->Y = (int32_t *)(void *)w;
+  K->Y = run->dim == 3 ? (int32_t *)(void *)w : NULL;
+  return NBS_OK;
+}
+
+/* Steps 6-10 for the central row iy of the central layer (set 0 of the y-lists, B0), whose
+ * neighbouring rows of eq. 3.79 are (iy-1,iz) in B0 and three rows of layer iz-1 in B1. */
+static inline __attribute__((always_inline)) nbs_status
+nbs__nbs_3d_row(nbs__run *run, const nbs__nbs_layout *L, const nbs__nbs_axes *g,
+                const nbs__nbs_block *K, int32_t iy) {
+  int32_t *restrict B0 = L->B0;
+  const int32_t *restrict B1 = L->B1;
+  int32_t *restrict A0 = L->A0;
+  int32_t *restrict A1 = L->A1;
+  int32_t *restrict RA0 = L->RA0;
+  int32_t *restrict RA1 = L->RA1;
+  const int32_t *restrict Y = K->Y;
+  const int32_t row = B0[iy];
+  B0[iy] = nbs__mark(row); /* mark the row "old" */
+  /* (iy-1,iz) may have been central already (read unmarked); rows of layer iz-1 are set 1
+   * and never marked. */
+  const int32_t yl = nbs__nbs_near(g, iy, -1, 1), yr = nbs__nbs_near(g, iy, 1, 1);
+  const int32_t nrow[4] = {nbs__unmark(B0[yl]), B1[yl], B1[iy], B1[yr]};
+
+  /* Step 6: the elements of the central row onto the x-lists of set 0; step 7: the elements
+   * of the neighbouring rows onto the x-lists of set 1. */
+  int32_t na0 = 0, na1 = 0;
+  for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) NBS__NBS_PUSH_X(e, A0, RA0, na0);
+  for (int l = 0; l < 4; l++) {
+    for (int32_t e = nrow[l]; e != NBS__EMPTY; e = Y[e]) NBS__NBS_PUSH_X(e, A1, RA1, na1);
+  }
+
+  /* Step 8: loop over the central row; the first element in a "new" cell (ix,iy,iz) makes
+   * it the central cell: mark it and check it with the 13-cell mask (eq. 3.73). */
+  for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) {
+    NBS__TRY(nbs__nbs_check_at(run, g, K, 3, A0, A1, e));
+  }
+
+  /* Steps 9 and 10: remove the x-lists of the central and of the neighbouring rows,
+   * resetting the heads they started. */
+  nbs__nbs_clear(A0, RA0, na0);
+  nbs__nbs_clear(A1, RA1, na1);
   return NBS_OK;
 }
 
@@ -601,67 +635,42 @@ static inline __attribute__((always_inline)) nbs_status
 nbs__nbs_3d_layer(nbs__run *run, const nbs__nbs_layout *L, const nbs__nbs_axes *g,
                   const nbs__nbs_block *K, int32_t nb0, int32_t nb1) {
   int32_t *restrict B0 = L->B0;
-  int32_t *restrict B1 = L->B1;
-  int32_t *restrict A0 = L->A0;
-  int32_t *restrict A1 = L->A1;
   const int32_t *restrict RB0 = L->RB0;
-  const int32_t *restrict RB1 = L->RB1;
-  int32_t *restrict RA0 = L->RA0;
-  int32_t *restrict RA1 = L->RA1;
-  const int32_t *restrict Y = K->Y;
 
   /* Step 5: loop over the central layer; the first element in a "new" row (iy,iz) makes it
    * the central row. Those first elements, in the order of the layer, are the ones step 3
    * met first in their rows: RB0 lists their rows in that order, so the loop runs over RB0
-   * instead of walking the layer a second time. */
+   * instead of walking the layer a second time. Then the row above, while it is new and not
+   * empty (chains of rows), while the rows it shares with this one are in the core's
+   * cache. */
   for (int32_t i = 0; i < nb0; i++) {
     int32_t iy = RB0[i];
     if (nbs__is_marked(B0[iy])) continue; /* central already, in a chain of rows */
-  for (;;) {
-    const int32_t row = B0[iy];
-    B0[iy] = nbs__mark(row); /* mark the row "old" */
-    /* The neighbouring rows of eq. 3.79: (iy-1,iz) may have been central already (read
-     * unmarked); rows of layer iz-1 are set 1 and never marked. */
-    const int32_t yl = nbs__nbs_near(g, iy, -1, 1), yr = nbs__nbs_near(g, iy, 1, 1);
-    const int32_t nrow[4] = {nbs__unmark(B0[yl]), B1[yl], B1[iy], B1[yr]};
-
-    /* Step 6: the elements of the central row onto the x-lists of set 0; step 7: the
-     * elements of the neighbouring rows onto the x-lists of set 1. */
-    int32_t na0 = 0, na1 = 0;
-    for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) NBS__NBS_PUSH_X(e, A0, RA0, na0);
-    for (int l = 0; l < 4; l++) {
-      for (int32_t e = nrow[l]; e != NBS__EMPTY; e = Y[e]) NBS__NBS_PUSH_X(e, A1, RA1, na1);
-    }
-
-    /* Step 8: loop over the central row; the first element in a "new" cell (ix,iy,iz)
-     * makes it the central cell: mark it and check it with the 13-cell mask (eq. 3.73). */
-    for (int32_t e = row; e != NBS__EMPTY; e = Y[e]) {
-      NBS__TRY(nbs__nbs_check_at(run, g, K, 3, A0, A1, e));
-    }
-
-    /* Steps 9 and 10: remove the x-lists of the central and of the neighbouring rows,
-     * resetting the heads they started. */
-    nbs__nbs_clear(A0, RA0, na0);
-    nbs__nbs_clear(A1, RA1, na1);
-
-    /* Chains of rows: the row above, if it is new and not empty, is central next, while
-     * the rows it shares with this one are still in the core's cache. */
-    const int32_t up = nbs__nbs_near(g, iy, 1, 1);
-    if (B0[up] < 0) break; /* empty (EMPTY) or old (marked) */
-    iy = up;
-  }
+    do {
+      NBS__TRY(nbs__nbs_3d_row(run, L, g, K, iy));
+      iy = nbs__nbs_near(g, iy, 1, 1);
+    } while (B0[iy] >= 0); /* not empty (EMPTY) nor old (marked) */
   }
 
   /* Step 11: remove the y-lists of the central layer and of layer iz-1. */
   nbs__nbs_clear(B0, RB0, nb0);
-  nbs__nbs_clear(B1, RB1, nb1);
+  nbs__nbs_clear(L->B1, L->RB1, nb1);
   return NBS_OK;
 }
 
-/* Copies element k into entry l of the block and pushes that entry onto the list of its
- * cell one level down in the set H (record R, top): steps 3 and 4 for one element in 3D
- * (the y-lists, linked by K->Y), in 2D the x-lists of section 3.8 (linked by the entries'
- * X). dim is a constant at every call. */
+/* Pushes entry l of the block onto the list of its cell one level down in the set H
+ * (record R, top): in 3D the y-lists (linked by K->Y), in 2D the x-lists of section 3.8
+ * (linked by the entries' X). dim is a constant at every call. */
+static inline __attribute__((always_inline)) void
+nbs__nbs_retake(const nbs__nbs_axes *g, const nbs__nbs_block *K, int dim, int32_t l, int32_t *H,
+                int32_t *R, int32_t *top) {
+  nbs__nbs_entry *q = &K->e[l];
+  const int32_t i = nbs__nbs_at(g, q->x, dim == 3 ? 1 : 0);
+  NBS__NBS_PUSH(l, *(dim == 3 ? &K->Y[l] : &q->X), H, i, R, *top);
+}
+
+/* Copies element k into entry l of the block and pushes that entry as nbs__nbs_retake
+ * does: steps 3 and 4 for one element. */
 static inline __attribute__((always_inline)) void
 nbs__nbs_take(const nbs__run *run, const nbs__nbs_axes *g, const nbs__nbs_block *K, int dim,
               int32_t k, int32_t l, int32_t *H, int32_t *R, int32_t *top) {
@@ -672,8 +681,7 @@ nbs__nbs_take(const nbs__run *run, const nbs__nbs_axes *g, const nbs__nbs_block 
   if (dim == 3) q->x[2] = p[2];
   if (run->r) K->r[l] = run->r[k];
   q->id = k;
-  const int32_t i = nbs__nbs_at(g, q->x, dim == 3 ? 1 : 0);
-  NBS__NBS_PUSH(l, *(dim == 3 ? &K->Y[l] : &q->X), H, i, R, *top);
+  nbs__nbs_retake(g, K, dim, l, H, R, top);
 }
 
 /* One step of a walk of an elements' list (linked by Z), at element *e: asks for the next
@@ -685,16 +693,6 @@ nbs__nbs_step(const nbs__run *run, const nbs__nbs_axes *g, const nbs__nbs_block 
   NBS__NBS_PREFETCH(Z, run->x, dim, next);
   nbs__nbs_take(run, g, K, dim, *e, l, H, R, top);
   *e = next;
-}
-
-/* The same for an entry already in the block (a layer or row just done, now the
- * neighbouring one of the next). */
-static inline __attribute__((always_inline)) void
-nbs__nbs_retake(const nbs__nbs_axes *g, const nbs__nbs_block *K, int dim, int32_t l, int32_t *H,
-                int32_t *R, int32_t *top) {
-  nbs__nbs_entry *q = &K->e[l];
-  const int32_t i = nbs__nbs_at(g, q->x, dim == 3 ? 1 : 0);
-  NBS__NBS_PUSH(l, *(dim == 3 ? &K->Y[l] : &q->X), H, i, R, *top);
 }
 
 /* The loop over the central row, whose entries are the ring's [s, s + len) (mod cap): the
@@ -981,7 +979,9 @@ bool nbs__nbs_fold(const nbs__run *run, int64_t lists[3]) {
    * at either end the core leaves out; never more than the axis. */
   int64_t e[3] = {1, 1, 1};
   for (int a = 0; a < dim; a++) {
-    for (int64_t i = 0; i < s; i++) P.cell[i] = (uint32_t)nbs__cell(g, nbs__nbs_sample(run, i, s), a);
+    for (int64_t i = 0; i < s; i++) {
+      P.cell[i] = (uint32_t)nbs__cell(g, nbs__nbs_sample(run, i, s), a);
+    }
     const uint32_t low = nbs__nbs_select(P.cell, s, s / 50);
     const int64_t core = (int64_t)nbs__nbs_select(P.cell, s, s - 1 - s / 50) - low + 1;
     e[a] = core + core / 16 + 2;

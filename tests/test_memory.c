@@ -46,7 +46,7 @@ static int64_t nbs_block_entries(nbs_context *ctx, const nbs_input *in) {
  * nz + 2ny + 2nx + N integers (eq. 3.80 without the y- and x-links, in the block); with up
  * to 8 lists per row (2D) or layer (3D) instead of one (nbs__nbs_zways), plus their counts
  * and the records of the heads each set of lists started (ny + 2nx in 2D, nz + 2ny + 2nx in
- * 3D), plus the block of 36 bytes per entry and its sentinel entry (see
+ * 3D), plus the block of 32 bytes per entry in 2D, 36 in 3D, and its sentinel entry (see
  * src/munjiza_nbs.c). The padding cells on each side of
  * each head array and the spare entry of each record are the fixed overhead. */
 static void test_nbs_formula(void) {
@@ -66,7 +66,9 @@ static void test_nbs_formula(void) {
         const int64_t ways = nbs__nbs_zways(st.cells[dim - 1], n);
         int64_t ints = dim == 2 ? (ways + 2) * st.cells[1] + 4 * st.cells[0] + n
                                 : (ways + 2) * st.cells[2] + 4 * st.cells[1] + 4 * st.cells[0] + n;
-        int64_t formula = ints * 4 + (nbs_block_entries(ctx, &in) + 1) * (in.radii ? 44 : 36);
+        /* a block entry: 32 bytes, 8 more with radii, 4 more in 3D (the y-link) */
+        const int64_t entry = 32 + (in.radii ? 8 : 0) + (dim == 3 ? 4 : 0);
+        int64_t formula = ints * 4 + (nbs_block_entries(ctx, &in) + 1) * entry;
         int64_t extra = (int64_t)st.work_bytes - formula;
         CHECK_MSG(extra >= 0 && extra <= 128,
                   "%dD %s n=%lld fraction %g: NBS holds %zu work bytes, the formula %lld",
