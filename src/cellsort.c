@@ -96,6 +96,8 @@
  * loop runs (3D, N = 1e6, both ends of each element prefetched: 16 ahead 6.6 ns per
  * element, 64 ahead 3.6, 128 ahead 2.9; 2D 5.0, 3.0, 2.2). */
 #define NBS__CS_AHEAD 128
+/* How far ahead the sweep asks for its own rows' keys and coordinates (see the sweep). */
+#define NBS__CS_SWEEP_AHEAD 64
 /* Entries after the end of the key array, read by NBS__CS_ADVANCE: the keys it compares at
  * once. */
 #define NBS__CS_PAD 16
@@ -850,6 +852,20 @@ nbs__cs_sweep_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
     int32_t w = a;
     for (int32_t c0 = a; c0 < b && st == NBS_OK; c0 += NBS__CS_LANES) {
       const int lanes = b - c0 < NBS__CS_LANES ? (int)(b - c0) : NBS__CS_LANES;
+      /* The sweep's own rows are its one stream of memory not read before: the gather (or
+       * the start from the last order) wrote them, and at scale they have left the caches
+       * since; the windows of the neighbouring rows read what the own rows read a row or a
+       * layer before. Asked for NBS__CS_SWEEP_AHEAD places ahead, which the processor's
+       * prefetchers, following some twenty streams, did not do as well (3D, N = 1e6, one
+       * thread: sweep 19.8 -> 18.2 ns per element; 1e7: 21.9 -> 18.9; 2D 1e6: 7.2 -> 6.3;
+       * asking for the windows' streams too gained nothing). */
+      const int32_t ahead = c0 + NBS__CS_SWEEP_AHEAD < c->n ? c0 + NBS__CS_SWEEP_AHEAD : c0;
+      __builtin_prefetch(key + ahead);
+      __builtin_prefetch(c->xs + ahead);
+      __builtin_prefetch(c->ys + ahead);
+      if (dim == 3) __builtin_prefetch(c->zs + ahead);
+      if (c->rs) __builtin_prefetch(c->rs + ahead);
+      if (c->istep == 1) __builtin_prefetch(c->ids + ahead); /* unpacked keys */
       const uint64_t k0 = key[c0] >> ks;
       const uint64_t fa = k0 & mx, fb = (key[c0 + lanes - 1] >> ks) & mx;
       nbs__cs_ranges rg;
