@@ -92,6 +92,10 @@
 #endif
 
 #define NBS__RADIX_BITS 9
+/* The most keys of a bucket of the radix sort's top digit for the buckets to be sorted one
+ * by one (nbs__radix): 256 kB of packed keys, twice (the bucket and its scratch), within a
+ * core's cache. */
+#define NBS__RADIX_LOCAL_MAX 32768
 /* How far ahead the gather prefetches: far enough for the memory's latency at the rate the
  * loop runs (3D, N = 1e6, both ends of each element prefetched: 16 ahead 6.6 ns per
  * element, 64 ahead 3.6, 128 ahead 2.9; 2D 5.0, 3.0, 2.2). */
@@ -170,65 +174,148 @@ static nbs__digits nbs__radix_digits(int bits) {
   return d;
 }
 
-/* LSD radix sort of (key, idx) on the digits dg of key from bit `low` on. The keys start in
+/* One stable counting pass of the digit at `shift` (dg's width) over n keys, sk (and si) to
+ * dk (and di). With several threads each takes a contiguous part of the input and scatters
+ * it after the parts of the threads before it, bucket by bucket: the pass stays stable, so
+ * its result is the same for any number of threads. A digit shared by every key moves
+ * nothing: the pass is skipped and false returned. When `top` is not NULL, the pass is the
+ * sort's first one, on its top digit (nbs__radix): top[b] receives where bucket b starts
+ * (top[buckets] = n), and the pass is skipped, false returned, when a bucket holds more
+ * than NBS__RADIX_LOCAL_MAX keys. */
+static bool nbs__radix_pass(const uint64_t *sk, const int32_t *si, uint64_t *dk, int32_t *di,
+                            int32_t n, int shift, nbs__digits dg, uint32_t *hist, int threads,
+                            uint32_t *top) {
+  const uint64_t mask = dg.buckets - 1;
+  const size_t buckets = dg.buckets;
+#if defined(_OPENMP)
+#pragma omp parallel num_threads(threads) if (threads > 1)
+#endif
+  {
+    const int t = nbs__thread_num();
+    int32_t from = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
+    uint32_t *h = hist + (size_t)t * buckets;
+    memset(h, 0, buckets * sizeof *h);
+    for (int32_t k = from; k < to; k++) h[(sk[k] >> shift) & mask]++;
+  }
+  const uint64_t d0 = (sk[0] >> shift) & mask;
+  uint64_t same = 0;
+  for (int t = 0; t < threads; t++) same += hist[(size_t)t * buckets + d0];
+  if (same == (uint64_t)n) return false;
+  uint32_t sum = 0;
+  for (size_t b = 0; b < buckets; b++) {
+    if (top) top[b] = sum;
+    for (int t = 0; t < threads; t++) {
+      uint32_t c = hist[(size_t)t * buckets + b];
+      hist[(size_t)t * buckets + b] = sum;
+      sum += c;
+    }
+    if (top && sum - top[b] > NBS__RADIX_LOCAL_MAX) return false;
+  }
+  if (top) top[buckets] = sum;
+#if defined(_OPENMP)
+#pragma omp parallel num_threads(threads) if (threads > 1)
+#endif
+  {
+    const int t = nbs__thread_num();
+    int32_t from = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
+    uint32_t *h = hist + (size_t)t * buckets;
+    if (si) {
+      for (int32_t k = from; k < to; k++) {
+        uint32_t at = h[(sk[k] >> shift) & mask]++;
+        dk[at] = sk[k];
+        di[at] = si[k];
+      }
+    } else {
+      for (int32_t k = from; k < to; k++) dk[h[(sk[k] >> shift) & mask]++] = sk[k];
+    }
+  }
+  return true;
+}
+
+/* The digits below the top one of the packed words [s, e), which share their top digit, by
+ * LSD passes on one thread between a and b, the range's places in the sort's two arrays:
+ * the result is left in out, one of the two. h: a histogram. */
+static void nbs__radix_local(uint64_t *a, uint64_t *b, uint64_t *out, uint32_t s, uint32_t e,
+                             int low, nbs__digits dg, uint32_t *h) {
+  const uint64_t mask = dg.buckets - 1;
+  const uint32_t len = e - s;
+  for (int p = 0; p + 1 < dg.passes; p++) {
+    const int shift = low + p * dg.width;
+    memset(h, 0, dg.buckets * sizeof *h);
+    for (uint32_t k = s; k < e; k++) h[(a[k] >> shift) & mask]++;
+    if (h[(a[s] >> shift) & mask] == len) continue; /* a digit shared by every word */
+    uint32_t sum = s;
+    for (size_t d = 0; d < dg.buckets; d++) {
+      const uint32_t c = h[d];
+      h[d] = sum;
+      sum += c;
+    }
+    for (uint32_t k = s; k < e; k++) b[h[(a[k] >> shift) & mask]++] = a[k];
+    uint64_t *t = a;
+    a = b;
+    b = t;
+  }
+  if (a != out) memcpy(out + s, a + s, (size_t)len * sizeof *a);
+}
+
+/* Radix sort of (key, idx) on the digits dg of key from bit `low` on. The keys start in
  * (sk, si) and the sort moves them between it and (dk, di), both of n entries; the result
  * is left in (out_k, out_i), one of the two (copied there if the passes end in the other).
  * si and di are NULL for packed words (the element in the word's `low` bits, below the
- * key): then each pass moves 8 bytes instead of 12. hist holds `threads`
- * histograms. With several threads each takes a contiguous part of the input and scatters
- * it after the parts of the threads before it, bucket by bucket: the sort stays stable, so
- * its result is the same for any number of threads. A digit shared by every key moves
- * nothing: its pass is skipped. Tried and left out, both slower: counting every digit in the
- * key pass instead of a pass per digit (3D, N = 1e6, key pass 1.2 -> 3.1 ns per element,
- * sort 3.2 -> 2.8); and, to save passes where the domain is huge, sorting the row bits only,
- * then each row by insertion, or by a small LSD when it is long (2D huge domain, N = 1e6,
- * 23.6 -> 25.5 ns per element: the insertion's branches cost more than the two passes). */
+ * key): then each pass moves 8 bytes instead of 12. hist holds `threads` histograms. The
+ * result is the same for any number of threads, and the same in both of the ways below.
+ *
+ * Top digit first, where the keys are many. An LSD sort's every pass reads and writes all
+ * the keys, at N = 1e6 and beyond from and to memory, not the caches; with two threads the
+ * passes shared the machine's memory and did not scale (3D, N = 1e6, two threads: sort 5.9
+ * ns per element against 5.0 with one, where the key pass, the gather and the sweep each
+ * took half as long). So the first pass scatters the keys by their top digit, stably, into
+ * buckets of a few thousand keys (every key of a bucket shares the top digit), and then
+ * each bucket is sorted by the digits below it, LSD, on its own: a bucket fits the cache,
+ * so those passes do not go to memory, and the threads share the buckets. A stable sort by
+ * the top digit followed by a stable sort of each bucket by the rest is the stable sort by
+ * the whole key: the same result as the LSD sort. It is taken when there are at least as
+ * many keys as the square of the buckets (the buckets' histograms then cost at most one
+ * step per key and pass), the keys are packed words (unpacked keys come with elements
+ * spread over a domain too wide for them, most of whose keys then share a top digit) and
+ * no bucket holds more than NBS__RADIX_LOCAL_MAX keys (a
+ * clustered scene can put most keys in a few buckets: they would not fit a cache, nor
+ * share out among the threads); otherwise the plain LSD sort runs, a pass per digit.
+ *
+ * A digit shared by every key moves nothing: its pass is skipped. Tried and left out, both
+ * slower: counting every digit in the key pass instead of a pass per digit (3D, N = 1e6,
+ * key pass 1.2 -> 3.1 ns per element, sort 3.2 -> 2.8); and, to save passes where the
+ * domain is huge, sorting the row bits only, then each row by insertion, or by a small LSD
+ * when it is long (2D huge domain, N = 1e6, 23.6 -> 25.5 ns per element: the insertion's
+ * branches cost more than the two passes). */
 static void nbs__radix(uint64_t *sk, int32_t *si, uint64_t *dk, int32_t *di, uint64_t *out_k,
                        int32_t *out_i, int32_t n, int low, nbs__digits dg, uint32_t *hist,
                        int threads) {
-  const uint64_t mask = dg.buckets - 1;
-  const size_t buckets = dg.buckets;
-  for (int p = 0; p < dg.passes; p++) {
-    const int shift = low + p * dg.width;
+  if (!si && dg.passes >= 2 && (uint64_t)n >= (uint64_t)dg.buckets * dg.buckets) {
+    uint32_t top[((size_t)1 << NBS__RADIX_BITS) + 1];
+    const int shift = low + (dg.passes - 1) * dg.width;
+    if (nbs__radix_pass(sk, si, dk, di, n, shift, dg, hist, threads, top)) {
+      /* each thread sorts the buckets that start in its part */
 #if defined(_OPENMP)
 #pragma omp parallel num_threads(threads) if (threads > 1)
 #endif
-    {
-      const int t = nbs__thread_num();
-      int32_t from = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
-      uint32_t *h = hist + (size_t)t * buckets;
-      memset(h, 0, buckets * sizeof *h);
-      for (int32_t k = from; k < to; k++) h[(sk[k] >> shift) & mask]++;
-    }
-    /* a digit shared by every key moves nothing: skip the pass */
-    const uint64_t d0 = (sk[0] >> shift) & mask;
-    uint64_t same = 0;
-    for (int t = 0; t < threads; t++) same += hist[(size_t)t * buckets + d0];
-    if (same == (uint64_t)n) continue;
-    uint32_t sum = 0;
-    for (size_t b = 0; b < buckets; b++) {
-      for (int t = 0; t < threads; t++) {
-        uint32_t c = hist[(size_t)t * buckets + b];
-        hist[(size_t)t * buckets + b] = sum;
-        sum += c;
-      }
-    }
-#if defined(_OPENMP)
-#pragma omp parallel num_threads(threads) if (threads > 1)
-#endif
-    {
-      const int t = nbs__thread_num();
-      int32_t from = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
-      uint32_t *h = hist + (size_t)t * buckets;
-      if (si) {
-        for (int32_t k = from; k < to; k++) {
-          uint32_t at = h[(sk[k] >> shift) & mask]++;
-          dk[at] = sk[k];
-          di[at] = si[k];
+      {
+        const int t = nbs__thread_num();
+        const uint32_t from = (uint32_t)nbs__chunk(n, t, threads);
+        const uint32_t to = (uint32_t)nbs__chunk(n, t + 1, threads);
+        uint32_t *h = hist + (size_t)t * dg.buckets;
+        for (size_t b = 0; b < dg.buckets; b++) {
+          if (top[b] < from || top[b] >= to || top[b + 1] == top[b]) continue;
+          nbs__radix_local(dk, sk, out_k, top[b], top[b + 1], low, dg, h);
         }
-      } else {
-        for (int32_t k = from; k < to; k++) dk[h[(sk[k] >> shift) & mask]++] = sk[k];
       }
+      return;
+    }
+    /* nothing moved: one bucket holds every key, or one bucket too many */
+  }
+  for (int p = 0; p < dg.passes; p++) {
+    if (!nbs__radix_pass(sk, si, dk, di, n, low + p * dg.width, dg, hist, threads, NULL)) {
+      continue;
     }
     uint64_t *tswap = sk;
     sk = dk;

@@ -197,14 +197,18 @@ static void test_time_steps(void) {
 }
 
 /* cellsort's threads: the same pairs in the same order for 1 to 4 threads, and the same
- * contacts as NBS (checked against direct in the tests above). */
+ * contacts as NBS (checked against direct in the tests above). Uniform and wide scenes take
+ * the radix sort's top digit first (nbs__radix); the clustered one puts most keys under one
+ * top digit, which the sort then leaves for its passes by digit (2D), or has unpacked keys
+ * (3D). */
 static void test_threads(void) {
+  static const scene_kind kinds[] = {SCENE_UNIFORM, SCENE_WIDE, SCENE_CLUSTERED};
   for (int dim = 2; dim <= 3; dim++) {
-    for (int wide = 0; wide < 2; wide++) {
+    for (size_t kk = 0; kk < sizeof kinds / sizeof *kinds; kk++) {
       scene_def def = scene_default_def();
       def.dim = dim;
       def.n = 120000;
-      def.kind = wide ? SCENE_WIDE : SCENE_UNIFORM;
+      def.kind = kinds[kk];
       scene s;
       char err[200];
       ASSERT_MSG(scene_generate(&def, &s, err, sizeof err) == 0, "%s", err);
@@ -235,8 +239,8 @@ static void test_threads(void) {
           pair_list_free(&ref);
         } else {
           CHECK_MSG(count == first_count && memcmp(p, first, count * sizeof *p) == 0,
-                    "%dD %s: %d threads give other output than one", dim, wide ? "wide" : "uniform",
-                    threads);
+                    "%dD %s: %d threads give other output than one", dim,
+                    scene_kind_name(kinds[kk]), threads);
         }
         nbs_context_destroy(ctx);
       }
