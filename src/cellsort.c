@@ -181,6 +181,31 @@ static nbs__digits nbs__radix_digits(int bits) {
   return d;
 }
 
+/* The counts of the digits at `shift` (dg's width) of sk[from, to), into h. */
+static inline void nbs__radix_count(const uint64_t *sk, int32_t from, int32_t to, int shift,
+                                    nbs__digits dg, uint32_t *h) {
+  const uint64_t mask = dg.buckets - 1;
+  memset(h, 0, dg.buckets * sizeof *h);
+  for (int32_t k = from; k < to; k++) h[(sk[k] >> shift) & mask]++;
+}
+
+/* sk[from, to) (and si) to dk (and di), each key to the place h gives for its digit, which
+ * then moves on: h holds where each bucket's part starts. */
+static inline void nbs__radix_scatter(const uint64_t *sk, const int32_t *si, uint64_t *dk,
+                                      int32_t *di, int32_t from, int32_t to, int shift,
+                                      nbs__digits dg, uint32_t *h) {
+  const uint64_t mask = dg.buckets - 1;
+  if (si) {
+    for (int32_t k = from; k < to; k++) {
+      uint32_t at = h[(sk[k] >> shift) & mask]++;
+      dk[at] = sk[k];
+      di[at] = si[k];
+    }
+  } else {
+    for (int32_t k = from; k < to; k++) dk[h[(sk[k] >> shift) & mask]++] = sk[k];
+  }
+}
+
 /* One stable counting pass of the digit at `shift` (dg's width) over n keys, sk (and si) to
  * dk (and di). With several threads each takes a contiguous part of the input and scatters
  * it after the parts of the threads before it, bucket by bucket: the pass stays stable, so
@@ -192,19 +217,16 @@ static nbs__digits nbs__radix_digits(int bits) {
 static bool nbs__radix_pass(const uint64_t *sk, const int32_t *si, uint64_t *dk, int32_t *di,
                             int32_t n, int shift, nbs__digits dg, uint32_t *hist, int threads,
                             uint32_t *top) {
-  const uint64_t mask = dg.buckets - 1;
   const size_t buckets = dg.buckets;
 #if defined(_OPENMP)
 #pragma omp parallel num_threads(threads) if (threads > 1)
 #endif
   {
     const int t = nbs__thread_num();
-    int32_t from = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
-    uint32_t *h = hist + (size_t)t * buckets;
-    memset(h, 0, buckets * sizeof *h);
-    for (int32_t k = from; k < to; k++) h[(sk[k] >> shift) & mask]++;
+    nbs__radix_count(sk, nbs__chunk(n, t, threads), nbs__chunk(n, t + 1, threads), shift, dg,
+                     hist + (size_t)t * buckets);
   }
-  const uint64_t d0 = (sk[0] >> shift) & mask;
+  const uint64_t d0 = (sk[0] >> shift) & (buckets - 1);
   uint64_t same = 0;
   for (int t = 0; t < threads; t++) same += hist[(size_t)t * buckets + d0];
   if (same == (uint64_t)n) return false;
@@ -224,17 +246,8 @@ static bool nbs__radix_pass(const uint64_t *sk, const int32_t *si, uint64_t *dk,
 #endif
   {
     const int t = nbs__thread_num();
-    int32_t from = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
-    uint32_t *h = hist + (size_t)t * buckets;
-    if (si) {
-      for (int32_t k = from; k < to; k++) {
-        uint32_t at = h[(sk[k] >> shift) & mask]++;
-        dk[at] = sk[k];
-        di[at] = si[k];
-      }
-    } else {
-      for (int32_t k = from; k < to; k++) dk[h[(sk[k] >> shift) & mask]++] = sk[k];
-    }
+    nbs__radix_scatter(sk, si, dk, di, nbs__chunk(n, t, threads),
+                       nbs__chunk(n, t + 1, threads), shift, dg, hist + (size_t)t * buckets);
   }
   return true;
 }
@@ -242,27 +255,24 @@ static bool nbs__radix_pass(const uint64_t *sk, const int32_t *si, uint64_t *dk,
 /* The digits below the top one of the packed words [s, e), which share their top digit, by
  * LSD passes on one thread between a and b, the range's places in the sort's two arrays:
  * the result is left in out, one of the two. h: a histogram. */
-static void nbs__radix_local(uint64_t *a, uint64_t *b, uint64_t *out, uint32_t s, uint32_t e,
+static void nbs__radix_local(uint64_t *a, uint64_t *b, uint64_t *out, int32_t s, int32_t e,
                              int low, nbs__digits dg, uint32_t *h) {
-  const uint64_t mask = dg.buckets - 1;
-  const uint32_t len = e - s;
   for (int p = 0; p + 1 < dg.passes; p++) {
     const int shift = low + p * dg.width;
-    memset(h, 0, dg.buckets * sizeof *h);
-    for (uint32_t k = s; k < e; k++) h[(a[k] >> shift) & mask]++;
-    if (h[(a[s] >> shift) & mask] == len) continue; /* a digit shared by every word */
-    uint32_t sum = s;
+    nbs__radix_count(a, s, e, shift, dg, h);
+    if (h[(a[s] >> shift) & (dg.buckets - 1)] == (uint32_t)(e - s)) continue; /* shared */
+    uint32_t sum = (uint32_t)s;
     for (size_t d = 0; d < dg.buckets; d++) {
       const uint32_t c = h[d];
       h[d] = sum;
       sum += c;
     }
-    for (uint32_t k = s; k < e; k++) b[h[(a[k] >> shift) & mask]++] = a[k];
+    nbs__radix_scatter(a, NULL, b, NULL, s, e, shift, dg, h);
     uint64_t *t = a;
     a = b;
     b = t;
   }
-  if (a != out) memcpy(out + s, a + s, (size_t)len * sizeof *a);
+  if (a != out) memcpy(out + s, a + s, (size_t)(e - s) * sizeof *a);
 }
 
 /* Radix sort of (key, idx) on the digits dg of key from bit `low` on. The keys start in
@@ -313,7 +323,7 @@ static void nbs__radix(uint64_t *sk, int32_t *si, uint64_t *dk, int32_t *di, uin
         uint32_t *h = hist + (size_t)t * dg.buckets;
         for (size_t b = 0; b < dg.buckets; b++) {
           if (top[b] < from || top[b] >= to || top[b + 1] == top[b]) continue;
-          nbs__radix_local(dk, sk, out_k, top[b], top[b + 1], low, dg, h);
+          nbs__radix_local(dk, sk, out_k, (int32_t)top[b], (int32_t)top[b + 1], low, dg, h);
         }
       }
       return;

@@ -198,16 +198,16 @@ static void test_time_steps(void) {
 
 /* cellsort's threads: the same pairs in the same order for 1 to 4 threads, and the same
  * contacts as NBS (checked against direct in the tests above). Uniform and wide scenes take
- * the radix sort's top digit first (nbs__radix); the clustered one puts most keys under one
- * top digit, which the sort then leaves for its passes by digit (2D), or has unpacked keys
- * (3D). */
+ * the radix sort's top digit first (nbs__radix); the clustered one, on 300000 elements, puts
+ * most keys under one top digit, which the sort then leaves for its passes by digit (2D),
+ * or has unpacked keys (3D). */
 static void test_threads(void) {
   static const scene_kind kinds[] = {SCENE_UNIFORM, SCENE_WIDE, SCENE_CLUSTERED};
   for (int dim = 2; dim <= 3; dim++) {
     for (size_t kk = 0; kk < sizeof kinds / sizeof *kinds; kk++) {
       scene_def def = scene_default_def();
       def.dim = dim;
-      def.n = 120000;
+      def.n = kinds[kk] == SCENE_CLUSTERED ? 300000 : 120000;
       def.kind = kinds[kk];
       scene s;
       char err[200];
