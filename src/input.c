@@ -21,6 +21,9 @@
  */
 #include "internal.h"
 
+#if defined(_OPENMP)
+#include <omp.h>
+#endif
 #include <float.h>
 
 #define NBS__EDGE_MARGIN 0x1p-18
@@ -116,6 +119,88 @@ static int32_t nbs__scan_radii(const double *r, int32_t n, double *rmax) {
   return -1;
 }
 
+/* The passes share the elements among the context's threads, each a range of whole groups
+ * (so that place j of each group still holds axis j % dim) of at least this many elements.
+ * With cellsort's phases halved by two threads, the pass's 1 ns per element was a twentieth
+ * of a detection (3D, N = 1e6, two threads: 1.00 -> 0.52 ns per element). */
+#define NBS__SCAN_MIN_PER_THREAD 32768
+
+/* nbs__scan_coords over `threads` ranges: the same bounding box (min and max do not depend
+ * on the order), and the first bad element, found in the lowest range that has one. The
+ * first group is read alone first, as nbs__scan_coords does, so that a bad number there is
+ * found before any thread reads further. */
+static int32_t nbs__scan_coords_threads(const double *x, size_t count, int dim, int threads,
+                                        double lo[3], double hi[3]) {
+  if (threads <= 1 || count < (size_t)NBS__SCAN_GROUP * (size_t)threads) {
+    return nbs__scan_coords(x, count, dim, lo, hi);
+  }
+  for (size_t k = 0; k < NBS__SCAN_GROUP; k++) {
+    if (!(x[k] >= -DBL_MAX && x[k] <= DBL_MAX)) return (int32_t)(k / (size_t)dim);
+  }
+  const size_t groups = count / NBS__SCAN_GROUP;
+  double tlo[NBS__THREADS_MAX][3], thi[NBS__THREADS_MAX][3];
+  int32_t tbad[NBS__THREADS_MAX];
+#if defined(_OPENMP)
+#pragma omp parallel num_threads(threads)
+#endif
+  {
+#if defined(_OPENMP)
+    const int t = omp_get_thread_num();
+#else
+    const int t = 0;
+#endif
+    const size_t from = groups * (size_t)t / (size_t)threads * NBS__SCAN_GROUP;
+    const size_t end = groups * (size_t)(t + 1) / (size_t)threads * NBS__SCAN_GROUP;
+    const size_t to = t + 1 == threads ? count : end;
+    const int32_t bad = nbs__scan_coords(x + from, to - from, dim, tlo[t], thi[t]);
+    tbad[t] = bad < 0 ? -1 : (int32_t)(from / (size_t)dim) + bad;
+  }
+  for (int t = 0; t < threads; t++) {
+    if (tbad[t] >= 0) return tbad[t];
+  }
+  for (int a = 0; a < dim; a++) {
+    lo[a] = tlo[0][a];
+    hi[a] = thi[0][a];
+    for (int t = 1; t < threads; t++) {
+      if (tlo[t][a] < lo[a]) lo[a] = tlo[t][a];
+      if (thi[t][a] > hi[a]) hi[a] = thi[t][a];
+    }
+  }
+  return -1;
+}
+
+/* nbs__scan_radii over `threads` ranges of whole blocks, in the same way. */
+static int32_t nbs__scan_radii_threads(const double *r, int32_t n, int threads, double *rmax) {
+  const int32_t block = NBS__SCAN_GROUP * NBS__SCAN_BLOCK;
+  const int32_t blocks = (n + block - 1) / block;
+  if (threads > blocks) threads = blocks;
+  if (threads <= 1) return nbs__scan_radii(r, n, rmax);
+  double tmax[NBS__THREADS_MAX];
+  int32_t tbad[NBS__THREADS_MAX];
+#if defined(_OPENMP)
+#pragma omp parallel num_threads(threads)
+#endif
+  {
+#if defined(_OPENMP)
+    const int t = omp_get_thread_num();
+#else
+    const int t = 0;
+#endif
+    const int32_t from = (int32_t)((int64_t)blocks * t / threads) * block;
+    const int32_t end = (int32_t)((int64_t)blocks * (t + 1) / threads) * block;
+    const int32_t to = t + 1 == threads || end > n ? n : end;
+    const int32_t bad = nbs__scan_radii(r + from, to - from, &tmax[t]);
+    tbad[t] = bad < 0 ? -1 : from + bad;
+  }
+  double top = 0.0;
+  for (int t = 0; t < threads; t++) {
+    if (tbad[t] >= 0) return tbad[t];
+    if (tmax[t] > top) top = tmax[t];
+  }
+  *rmax = top;
+  return -1;
+}
+
 nbs_status nbs__prepare(nbs__run *run, const nbs_input *in) {
   nbs_context *ctx = run->ctx;
   if (in->dim != 2 && in->dim != 3) {
@@ -160,7 +245,9 @@ nbs_status nbs__prepare(nbs__run *run, const nbs_input *in) {
 
   /* The pass: every coordinate finite, every radius finite and > 0; box and rmax. */
   double lo[3], hi[3];
-  int32_t bad = nbs__scan_coords(in->coords, (size_t)n * (size_t)dim, dim, lo, hi);
+  const int threads = nbs__threads(ctx, n / NBS__SCAN_MIN_PER_THREAD);
+  int32_t bad =
+      nbs__scan_coords_threads(in->coords, (size_t)n * (size_t)dim, dim, threads, lo, hi);
   if (bad >= 0) {
     const double *xb = in->coords + (size_t)bad * (size_t)dim;
     int a = 0;
@@ -170,7 +257,7 @@ nbs_status nbs__prepare(nbs__run *run, const nbs_input *in) {
   }
   double rmax;
   if (in->radii) {
-    bad = nbs__scan_radii(in->radii, n, &rmax);
+    bad = nbs__scan_radii_threads(in->radii, n, threads, &rmax);
     if (bad >= 0) {
       return nbs__fail(ctx, NBS_ERR_RADIUS, bad,
                        "element %d: radius %g is not a finite number > 0", (int)bad,

@@ -165,6 +165,92 @@ static void test_bad_numbers(void) {
   nbs_context_destroy(ctx);
 }
 
+/* The pass over the coordinates and radii is shared among the context's threads (input.c):
+ * with 1 to 4 threads, a bad number at either side of where one thread's range ends and the
+ * next begins is named, and a second one in a later range never is; nor does the box
+ * depend on the threads (the same cells and pairs, with its ends outside the first range). */
+static void test_bad_numbers_threads(void) {
+  for (int dim = 2; dim <= 3; dim++) {
+    scene s = test_scene(SCENE_UNIFORM, dim, 140011, 0.5);
+    nbs_input in = scene_input(&s);
+    const int64_t n = s.n;
+    /* the box's ends in ranges after the first: an element above every other on each axis,
+     * one below */
+    for (int a = 0; a < dim; a++) {
+      double lo = s.coords[a], hi = s.coords[a];
+      for (int64_t k = 0; k < n; k++) {
+        lo = fmin(lo, s.coords[k * dim + a]);
+        hi = fmax(hi, s.coords[k * dim + a]);
+      }
+      s.coords[(n - 3) * dim + a] = hi + 3.0;
+      s.coords[(n * 5 / 8) * dim + a] = lo - 3.0;
+    }
+    double *radii = malloc((size_t)n * sizeof *radii);
+    for (int64_t k = 0; k < n; k++) radii[k] = 0.5;
+    pair_list ref;
+    nbs_context *one;
+    nbs_context_def cdef = nbs_default_context_def();
+    cdef.threads = 1;
+    ASSERT_OK(nbs_context_create(&cdef, &one));
+    ASSERT_OK(detect_sorted(one, &s, NBS_CELLSORT, NBS_MODE_CONTACTS, &ref));
+    nbs_stats st1;
+    ASSERT_OK(nbs_last_stats(one, &st1));
+    nbs_context_destroy(one);
+    for (int threads = 1; threads <= 4; threads++) {
+      cdef.threads = threads;
+      nbs_context *ctx;
+      ASSERT_OK(nbs_context_create(&cdef, &ctx));
+      for (int parts = 2; parts <= 4; parts++) {
+        for (int t = 1; t < parts; t++) {
+          const int64_t deltas[] = {-9, -5, -1, 0, 1, 5, 9};
+          for (size_t d = 0; d < sizeof deltas / sizeof *deltas; d++) {
+            const int64_t at = n * t / parts + deltas[d];
+            const int axis = (int)(((size_t)t + d) % (size_t)dim);
+            const size_t i = (size_t)at * (size_t)dim + (size_t)axis;
+            const size_t last = (size_t)n * (size_t)dim - 1;
+            const double keep = s.coords[i], keep_last = s.coords[last];
+            s.coords[i] = d % 2 ? INFINITY : NAN;
+            s.coords[last] = NAN;
+            CHECK_STATUS(nbs_detect(ctx, &in, NULL), NBS_ERR_COORD);
+            CHECK_MSG(nbs_context_error_element(ctx) == at, "%d threads: element %lld, not %lld",
+                      threads, (long long)nbs_context_error_element(ctx), (long long)at);
+            s.coords[last] = keep_last;
+            s.coords[i] = keep;
+            radii[at] = d % 2 ? -1.0 : NAN;
+            radii[n - 1] = 0.0;
+            in.radii = radii;
+            CHECK_STATUS(nbs_detect(ctx, &in, NULL), NBS_ERR_RADIUS);
+            CHECK_EQ(nbs_context_error_element(ctx), at);
+            in.radii = NULL;
+            radii[at] = 0.5;
+            radii[n - 1] = 0.5;
+          }
+        }
+      }
+      /* no bad number: the same box, so the same pairs, whatever the threads; the largest
+       * radius in the last range still sets the cell edge */
+      pair_list got;
+      ASSERT_OK(detect_sorted(ctx, &s, NBS_CELLSORT, NBS_MODE_CONTACTS, &got));
+      CHECK_TRUE(pair_lists_equal(&ref, &got));
+      pair_list_free(&got);
+      nbs_stats st;
+      ASSERT_OK(nbs_last_stats(ctx, &st));
+      for (int a = 0; a < 3; a++) CHECK_EQ(st.cells[a], st1.cells[a]);
+      radii[n - 2] = 0.75;
+      in.radii = radii;
+      CHECK_STATUS(nbs_detect(ctx, &in, NULL), NBS_OK);
+      ASSERT_OK(nbs_last_stats(ctx, &st));
+      CHECK_TRUE(st.cell_size >= 1.5 && st.cell_size < 1.5 * (1 + 1e-5));
+      in.radii = NULL;
+      radii[n - 2] = 0.5;
+      nbs_context_destroy(ctx);
+    }
+    pair_list_free(&ref);
+    free(radii);
+    scene_free(&s);
+  }
+}
+
 static void test_budget_extent(void) {
   nbs_context_def cdef = nbs_default_context_def();
   /* under what NBS's heads need even with its axes folded (about 1.4 kB here) */
@@ -350,6 +436,7 @@ int main(int argc, char **argv) {
   static const test_case tests[] = {
       {"null_and_ranges", test_null_and_ranges},
       {"bad_numbers", test_bad_numbers},
+      {"bad_numbers_threads", test_bad_numbers_threads},
       {"budget_extent", test_budget_extent},
       {"pair_limits", test_pair_limits},
       {"allocator_def", test_allocator_def},
