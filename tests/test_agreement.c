@@ -250,6 +250,51 @@ static void test_threads(void) {
   }
 }
 
+/* cellsort's radix sort within a bucket of the top digit skips a digit that every key of the
+ * bucket shares, and then copies the bucket to where the sort leaves it (nbs__radix_local).
+ * No random scene makes a bucket share a digit, so this one is built for it, in 2D: 128
+ * rows 16 cells apart, each with 128 elements on one line across 13 cells, and two more
+ * elements 100 cells out in x. The key (iy, x sub-cell) then has 11 + 10 bits, sorted in 3
+ * digits of 7 bits: each top digit holds one row (iy / 16), whose keys share the middle
+ * digit (iy % 16 and the highest x bits), but for the row of the two far elements. */
+static void test_shared_digit(void) {
+  const int rows = 128, per_row = 128;
+  scene s;
+  memset(&s, 0, sizeof s);
+  s.dim = 2;
+  s.n = rows * per_row + 2;
+  s.diameter = 1.0;
+  s.coords = malloc((size_t)s.n * 2 * sizeof *s.coords);
+  uint64_t state = 12345;
+  for (int j = 0; j < rows; j++) {
+    for (int k = 0; k < per_row; k++) {
+      state = state * 6364136223846793005u + 1442695040888963407u;
+      const int64_t e = (int64_t)j * per_row + k;
+      s.coords[2 * e] = 13.0 * (double)(state >> 11) * 0x1p-53;
+      s.coords[2 * e + 1] = 16.0 * j;
+    }
+  }
+  s.coords[2 * (s.n - 2)] = 100.0;
+  s.coords[2 * (s.n - 2) + 1] = 0.0;
+  s.coords[2 * (s.n - 1)] = 100.5;
+  s.coords[2 * (s.n - 1) + 1] = 0.0;
+  nbs_context *ctx;
+  ASSERT_OK(nbs_context_create(NULL, &ctx));
+  pair_list ref, got;
+  ASSERT_OK(detect_sorted(ctx, &s, NBS_DIRECT, NBS_MODE_CONTACTS, &ref));
+  CHECK_TRUE(ref.count > (size_t)s.n);
+  ASSERT_OK(detect_sorted(ctx, &s, NBS_CELLSORT, NBS_MODE_CONTACTS, &got));
+  CHECK_MSG(pair_lists_equal(&got, &ref), "cellsort: %zu contacts, direct finds %zu", got.count,
+            ref.count);
+  nbs_stats st;
+  ASSERT_OK(nbs_last_stats(ctx, &st));
+  CHECK_EQ(st.algorithm, NBS_CELLSORT);
+  pair_list_free(&got);
+  pair_list_free(&ref);
+  nbs_context_destroy(ctx);
+  scene_free(&s);
+}
+
 int main(int argc, char **argv) {
   static const test_case tests[] = {
       {"scenes_2d", test_scenes_2d},
@@ -257,6 +302,7 @@ int main(int argc, char **argv) {
       {"fresh_contexts", test_fresh_contexts},
       {"time_steps", test_time_steps},
       {"threads", test_threads},
+      {"shared_digit", test_shared_digit},
   };
   return test_main(argc, argv, tests, sizeof tests / sizeof *tests);
 }
