@@ -295,6 +295,73 @@ static void test_shared_digit(void) {
   scene_free(&s);
 }
 
+/* The buckets' scratch (nbs__radix): each thread's is as large as the largest bucket, and
+ * they must fit the y coordinates' array, n words in 2D; where they would not, the passes of
+ * a bucket use its place in the sort's other array. Here one of 128 buckets holds 21000 of
+ * 40050 keys: one thread takes the scratch, two cannot, and both give the same bytes, with
+ * the contacts of NBS. The layout of test_shared_digit, with the first bucket's first rows
+ * filled across the whole domain. */
+static void test_bucket_scratch(void) {
+  const int rows = 128, per_row = 150, fat = 21000;
+  scene s;
+  memset(&s, 0, sizeof s);
+  s.dim = 2;
+  s.n = (rows - 1) * per_row + fat;
+  s.diameter = 1.0;
+  s.coords = malloc((size_t)s.n * 2 * sizeof *s.coords);
+  uint64_t state = 777;
+  for (int64_t e = 0; e < s.n; e++) {
+    state = state * 6364136223846793005u + 1442695040888963407u;
+    const double u = (double)(state >> 11) * 0x1p-53;
+    state = state * 6364136223846793005u + 1442695040888963407u;
+    const double v = (double)(state >> 11) * 0x1p-53;
+    if (e < fat) { /* the first bucket: its first rows, x across the domain */
+      s.coords[2 * e] = 100.0 * u;
+      s.coords[2 * e + 1] = 8.0 * v;
+    } else {
+      const int64_t j = 1 + (e - fat) / per_row;
+      s.coords[2 * e] = 13.0 * u;
+      s.coords[2 * e + 1] = 16.0 * (double)j;
+    }
+  }
+  pair_list ref;
+  nbs_context *ctx;
+  ASSERT_OK(nbs_context_create(NULL, &ctx));
+  ASSERT_OK(detect_sorted(ctx, &s, NBS_NBS, NBS_MODE_CONTACTS, &ref));
+  nbs_context_destroy(ctx);
+  nbs_input in = scene_input(&s);
+  nbs_pair *first = NULL;
+  size_t first_count = 0;
+  for (int threads = 1; threads <= 2; threads++) {
+    nbs_context_def cdef = nbs_default_context_def();
+    cdef.threads = threads;
+    ASSERT_OK(nbs_context_create(&cdef, &ctx));
+    nbs_detect_def ddef = nbs_default_detect_def();
+    ddef.algorithm = NBS_CELLSORT;
+    ASSERT_OK(nbs_detect(ctx, &in, &ddef));
+    size_t count;
+    const nbs_pair *p = nbs_pairs(ctx, &count);
+    if (threads == 1) {
+      first = malloc(count * sizeof *first);
+      memcpy(first, p, count * sizeof *p);
+      first_count = count;
+      pair_list got = {malloc(count * sizeof *p), count};
+      memcpy(got.p, p, count * sizeof *p);
+      nbs_sort_pairs(got.p, count);
+      CHECK_MSG(pair_lists_equal(&got, &ref), "cellsort: %zu contacts, nbs finds %zu",
+                got.count, ref.count);
+      pair_list_free(&got);
+    } else {
+      CHECK_MSG(count == first_count && memcmp(p, first, count * sizeof *p) == 0,
+                "two threads give other output than one");
+    }
+    nbs_context_destroy(ctx);
+  }
+  free(first);
+  pair_list_free(&ref);
+  scene_free(&s);
+}
+
 int main(int argc, char **argv) {
   static const test_case tests[] = {
       {"scenes_2d", test_scenes_2d},
@@ -303,6 +370,7 @@ int main(int argc, char **argv) {
       {"time_steps", test_time_steps},
       {"threads", test_threads},
       {"shared_digit", test_shared_digit},
+      {"bucket_scratch", test_bucket_scratch},
   };
   return test_main(argc, argv, tests, sizeof tests / sizeof *tests);
 }
