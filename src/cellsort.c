@@ -79,9 +79,6 @@
  */
 #include "internal.h"
 
-#if defined(_OPENMP)
-#include <omp.h>
-#endif
 #include <stdlib.h>
 /* The AVX-512 kernel needs a compiler that can target it (GCC and clang on x86-64); the
  * processor is asked at run time. */
@@ -151,20 +148,6 @@ static int nbs__bits(uint64_t count) {
   int b = 0;
   while (b < 64 && (count - 1) >> b) b++;
   return b;
-}
-
-/* The calling thread's number in a parallel region (0 without OpenMP). */
-static inline int nbs__thread_num(void) {
-#if defined(_OPENMP)
-  return omp_get_thread_num();
-#else
-  return 0;
-#endif
-}
-
-/* Where thread t's share of n elements starts, when `threads` share them evenly. */
-static inline int32_t nbs__chunk(int32_t n, int t, int threads) {
-  return (int32_t)((int64_t)n * t / threads);
 }
 
 /* The radix sort's passes: as few digits of at most NBS__RADIX_BITS bits as `bits` needs,
@@ -297,19 +280,19 @@ static void nbs__radix_local(uint64_t *a, uint64_t *out, uint64_t *other, int32_
  * bucket go between its place in the output and a scratch of each thread's own, the same
  * tens of kB for every bucket the thread sorts, which stays in its cache; the bucket's place
  * in the sort's other array, used where the threads' scratches would not fit the y (and z)
- * arrays, left dirty lines to be written back to memory (3D, N = 1e6, one thread: the buckets' passes 3.5 -> 2.3 ns per
- * element; detection, interleaved, min of 6: 32.8 -> 32.0, 2D 19.5 -> 17.3, clustered 40.2
- * -> 39.4; two threads 18.6 either way: their buckets' passes took 2.7, not faster than one
- * thread's, for reasons not found: not the memory's bandwidth, nor lines moving between
- * the cores). A stable sort by
- * the top digit followed by a stable sort of each bucket by the rest is the stable sort by
- * the whole key: the same result as the LSD sort. It is taken when there are at least as
- * many keys as the square of the buckets (the buckets' histograms then cost at most one
- * step per key and pass), the keys are packed words (unpacked keys come with elements
- * spread over a domain too wide for them, most of whose keys then share a top digit) and
- * no bucket holds more than NBS__RADIX_LOCAL_MAX keys (a
- * clustered scene can put most keys in a few buckets: they would not fit a cache, nor
- * share out among the threads); otherwise the plain LSD sort runs, a pass per digit.
+ * arrays, left dirty lines to be written back to memory (3D, N = 1e6, one thread: the
+ * buckets' passes 3.5 -> 2.3 ns per element; detection, interleaved, min of 6: 32.8 ->
+ * 32.0, 2D 19.5 -> 17.3, clustered 40.2 -> 39.4; two threads 18.6 either way: their
+ * buckets' passes took 2.7, not faster than one thread's, for reasons not found: not the
+ * memory's bandwidth, nor lines moving between the cores). A stable sort by the top digit
+ * followed by a stable sort of each bucket by the rest is the stable sort by the whole key:
+ * the same result as the LSD sort. It is taken when there are at least as many keys as the
+ * square of the buckets (the buckets' histograms then cost at most one step per key and
+ * pass), the keys are packed words (unpacked keys come with elements spread over a domain
+ * too wide for them, most of whose keys then share a top digit) and no bucket holds more
+ * than NBS__RADIX_LOCAL_MAX keys (a clustered scene can put most keys in a few buckets: they
+ * would not fit a cache, nor share out among the threads); otherwise the plain LSD sort
+ * runs, a pass per digit.
  *
  * A digit shared by every key moves nothing: its pass is skipped. Tried and left out, both
  * slower: counting every digit in the key pass instead of a pass per digit (3D, N = 1e6,

@@ -7,10 +7,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-#if defined(_OPENMP)
-#include <omp.h>
-#endif
-
 const char *nbs_version(void) { return NBS_VERSION_STRING; }
 
 const char *nbs_status_name(nbs_status status) {

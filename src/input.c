@@ -21,9 +21,6 @@
  */
 #include "internal.h"
 
-#if defined(_OPENMP)
-#include <omp.h>
-#endif
 #include <float.h>
 
 #define NBS__EDGE_MARGIN 0x1p-18
@@ -144,11 +141,7 @@ static int32_t nbs__scan_coords_threads(const double *x, size_t count, int dim, 
 #pragma omp parallel num_threads(threads)
 #endif
   {
-#if defined(_OPENMP)
-    const int t = omp_get_thread_num();
-#else
-    const int t = 0;
-#endif
+    const int t = nbs__thread_num();
     const size_t from = groups * (size_t)t / (size_t)threads * NBS__SCAN_GROUP;
     const size_t end = groups * (size_t)(t + 1) / (size_t)threads * NBS__SCAN_GROUP;
     const size_t to = t + 1 == threads ? count : end;
@@ -181,14 +174,9 @@ static int32_t nbs__scan_radii_threads(const double *r, int32_t n, int threads, 
 #pragma omp parallel num_threads(threads)
 #endif
   {
-#if defined(_OPENMP)
-    const int t = omp_get_thread_num();
-#else
-    const int t = 0;
-#endif
-    const int32_t from = (int32_t)((int64_t)blocks * t / threads) * block;
-    const int32_t end = (int32_t)((int64_t)blocks * (t + 1) / threads) * block;
-    const int32_t to = t + 1 == threads || end > n ? n : end;
+    const int t = nbs__thread_num();
+    const int32_t from = nbs__chunk(blocks, t, threads) * block;
+    const int32_t to = t + 1 == threads ? n : nbs__chunk(blocks, t + 1, threads) * block;
     const int32_t bad = nbs__scan_radii(r + from, to - from, &tmax[t]);
     tbad[t] = bad < 0 ? -1 : from + bad;
   }

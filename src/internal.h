@@ -22,6 +22,9 @@
 #include "nbs/nbs.h"
 
 #include <math.h>
+#if defined(_OPENMP)
+#include <omp.h>
+#endif
 #include <stdarg.h>
 #include <stdbool.h>
 #include <stdint.h>
@@ -155,6 +158,20 @@ nbs_status nbs__thread_pairs_grow(nbs_context *ctx, int t, size_t need, nbs_pair
                                   size_t *cap);
 /* How many threads to use for work that can use at most `useful` (>= 1 always). */
 int nbs__threads(const nbs_context *ctx, int64_t useful);
+
+/* The calling thread's number in a parallel region (0 without OpenMP). */
+static inline int nbs__thread_num(void) {
+#if defined(_OPENMP)
+  return omp_get_thread_num();
+#else
+  return 0;
+#endif
+}
+
+/* Where thread t's share of n items starts, when `threads` share them evenly. */
+static inline int32_t nbs__chunk(int32_t n, int t, int threads) {
+  return (int32_t)((int64_t)n * t / threads);
+}
 
 /* ---- errors (context.c) ---- */
 /* Records status with a formatted detail (element -1 when none) and returns status. */

@@ -196,8 +196,45 @@ static void test_time_steps(void) {
   }
 }
 
-/* cellsort's threads: the same pairs in the same order for 1 to 4 threads, and the same
- * contacts as NBS (checked against direct in the tests above). Uniform and wide scenes take
+/* cellsort on s with 1 to max_threads threads: one thread finds NBS's contacts (NBS is
+ * checked against direct in the tests above), and every other number of threads gives the
+ * same pairs in the same order as one. */
+static void check_cellsort_threads(const scene *s, int max_threads, const char *label) {
+  nbs_input in = scene_input(s);
+  nbs_pair *first = NULL;
+  size_t first_count = 0;
+  for (int threads = 1; threads <= max_threads; threads++) {
+    nbs_context_def cdef = nbs_default_context_def();
+    cdef.threads = threads;
+    nbs_context *ctx;
+    ASSERT_OK(nbs_context_create(&cdef, &ctx));
+    nbs_detect_def ddef = nbs_default_detect_def();
+    ddef.algorithm = NBS_CELLSORT;
+    ASSERT_OK(nbs_detect(ctx, &in, &ddef));
+    size_t count;
+    const nbs_pair *p = nbs_pairs(ctx, &count);
+    if (threads == 1) {
+      first = malloc(count * sizeof *first);
+      memcpy(first, p, count * sizeof *p);
+      first_count = count;
+      pair_list got = {malloc(count * sizeof *p), count}, ref;
+      memcpy(got.p, p, count * sizeof *p);
+      nbs_sort_pairs(got.p, count);
+      ASSERT_OK(detect_sorted(ctx, s, NBS_NBS, NBS_MODE_CONTACTS, &ref));
+      CHECK_MSG(pair_lists_equal(&got, &ref), "%s: cellsort finds %zu contacts, nbs %zu",
+                label, got.count, ref.count);
+      pair_list_free(&got);
+      pair_list_free(&ref);
+    } else {
+      CHECK_MSG(count == first_count && memcmp(p, first, count * sizeof *p) == 0,
+                "%s: %d threads give other output than one", label, threads);
+    }
+    nbs_context_destroy(ctx);
+  }
+  free(first);
+}
+
+/* cellsort's threads (check_cellsort_threads) for 1 to 4 threads. Uniform and wide scenes take
  * the radix sort's top digit first (nbs__radix); the clustered one, on 300000 elements, puts
  * most keys under one top digit, which the sort then leaves for its passes by digit (2D),
  * or has unpacked keys (3D). */
@@ -212,42 +249,19 @@ static void test_threads(void) {
       scene s;
       char err[200];
       ASSERT_MSG(scene_generate(&def, &s, err, sizeof err) == 0, "%s", err);
-      nbs_input in = scene_input(&s);
-      nbs_pair *first = NULL;
-      size_t first_count = 0;
-      for (int threads = 1; threads <= 4; threads++) {
-        nbs_context_def cdef = nbs_default_context_def();
-        cdef.threads = threads;
-        nbs_context *ctx;
-        ASSERT_OK(nbs_context_create(&cdef, &ctx));
-        nbs_detect_def ddef = nbs_default_detect_def();
-        ddef.algorithm = NBS_CELLSORT;
-        ASSERT_OK(nbs_detect(ctx, &in, &ddef));
-        size_t count;
-        const nbs_pair *p = nbs_pairs(ctx, &count);
-        if (threads == 1) {
-          first = malloc(count * sizeof *first);
-          memcpy(first, p, count * sizeof *p);
-          first_count = count;
-          pair_list got = {first, count}, ref;
-          got.p = malloc(count * sizeof *p);
-          memcpy(got.p, p, count * sizeof *p);
-          nbs_sort_pairs(got.p, count);
-          ASSERT_OK(detect_sorted(ctx, &s, NBS_NBS, NBS_MODE_CONTACTS, &ref));
-          CHECK_MSG(pair_lists_equal(&got, &ref), "%dD: cellsort and nbs differ", dim);
-          pair_list_free(&got);
-          pair_list_free(&ref);
-        } else {
-          CHECK_MSG(count == first_count && memcmp(p, first, count * sizeof *p) == 0,
-                    "%dD %s: %d threads give other output than one", dim,
-                    scene_kind_name(kinds[kk]), threads);
-        }
-        nbs_context_destroy(ctx);
-      }
-      free(first);
+      char label[64];
+      snprintf(label, sizeof label, "%dD %s", dim, scene_kind_name(kinds[kk]));
+      check_cellsort_threads(&s, 4, label);
       scene_free(&s);
     }
   }
+}
+
+/* A number in [0, 1) from a 64-bit linear congruential generator, for the scenes built by
+ * hand below. */
+static double next_unit(uint64_t *state) {
+  *state = *state * 6364136223846793005u + 1442695040888963407u;
+  return (double)(*state >> 11) * 0x1p-53;
 }
 
 /* cellsort's radix sort within a bucket of the top digit skips a digit that every key of the
@@ -268,9 +282,8 @@ static void test_shared_digit(void) {
   uint64_t state = 12345;
   for (int j = 0; j < rows; j++) {
     for (int k = 0; k < per_row; k++) {
-      state = state * 6364136223846793005u + 1442695040888963407u;
       const int64_t e = (int64_t)j * per_row + k;
-      s.coords[2 * e] = 13.0 * (double)(state >> 11) * 0x1p-53;
+      s.coords[2 * e] = 13.0 * next_unit(&state);
       s.coords[2 * e + 1] = 16.0 * j;
     }
   }
@@ -311,10 +324,8 @@ static void test_bucket_scratch(void) {
   s.coords = malloc((size_t)s.n * 2 * sizeof *s.coords);
   uint64_t state = 777;
   for (int64_t e = 0; e < s.n; e++) {
-    state = state * 6364136223846793005u + 1442695040888963407u;
-    const double u = (double)(state >> 11) * 0x1p-53;
-    state = state * 6364136223846793005u + 1442695040888963407u;
-    const double v = (double)(state >> 11) * 0x1p-53;
+    const double u = next_unit(&state);
+    const double v = next_unit(&state);
     if (e < fat) { /* the first bucket: its first rows, x across the domain */
       s.coords[2 * e] = 100.0 * u;
       s.coords[2 * e + 1] = 8.0 * v;
@@ -324,41 +335,7 @@ static void test_bucket_scratch(void) {
       s.coords[2 * e + 1] = 16.0 * (double)j;
     }
   }
-  pair_list ref;
-  nbs_context *ctx;
-  ASSERT_OK(nbs_context_create(NULL, &ctx));
-  ASSERT_OK(detect_sorted(ctx, &s, NBS_NBS, NBS_MODE_CONTACTS, &ref));
-  nbs_context_destroy(ctx);
-  nbs_input in = scene_input(&s);
-  nbs_pair *first = NULL;
-  size_t first_count = 0;
-  for (int threads = 1; threads <= 2; threads++) {
-    nbs_context_def cdef = nbs_default_context_def();
-    cdef.threads = threads;
-    ASSERT_OK(nbs_context_create(&cdef, &ctx));
-    nbs_detect_def ddef = nbs_default_detect_def();
-    ddef.algorithm = NBS_CELLSORT;
-    ASSERT_OK(nbs_detect(ctx, &in, &ddef));
-    size_t count;
-    const nbs_pair *p = nbs_pairs(ctx, &count);
-    if (threads == 1) {
-      first = malloc(count * sizeof *first);
-      memcpy(first, p, count * sizeof *p);
-      first_count = count;
-      pair_list got = {malloc(count * sizeof *p), count};
-      memcpy(got.p, p, count * sizeof *p);
-      nbs_sort_pairs(got.p, count);
-      CHECK_MSG(pair_lists_equal(&got, &ref), "cellsort: %zu contacts, nbs finds %zu",
-                got.count, ref.count);
-      pair_list_free(&got);
-    } else {
-      CHECK_MSG(count == first_count && memcmp(p, first, count * sizeof *p) == 0,
-                "two threads give other output than one");
-    }
-    nbs_context_destroy(ctx);
-  }
-  free(first);
-  pair_list_free(&ref);
+  check_cellsort_threads(&s, 2, "bucket_scratch");
   scene_free(&s);
 }
 
