@@ -1204,7 +1204,8 @@ static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
   uint64_t *key = c->key;
   double *xs = c->xs, *ys = c->ys, *zs = c->zs, *rs = c->rs;
   const double *x = run->x, *r = run->r;
-  int32_t kept[NBS__THREADS_MAX];
+  /* zeroed for GCC 12, which without OpenMP takes kept[0] for unset after the pass */
+  int32_t kept[NBS__THREADS_MAX] = {0};
   int64_t out[NBS__THREADS_MAX];
   bool over = false;
 #if defined(_OPENMP)
