@@ -304,8 +304,9 @@ def machine_name():
 
 
 def nbs_build_id(build):
-    """The commit the drivers were built from, '+' when src/ or include/ had changes then:
-    written by bench/run after building; else the work tree's state now."""
+    """The commit the drivers were linked from, '+' when src/ or include/ had changes then:
+    written by the build after each link of nbs_bench (bench/build_id.cmake); else (a tree
+    built before that existed) the work tree's state now."""
     try:
         return open(os.path.join(build, "nbs_build_id")).read().strip()
     except OSError:
@@ -356,10 +357,8 @@ def describe_machine(a, started, load_start):
               f"cmake: {first_line(['cmake', '--version'])}",
               f"lmp: {first_line(['sh', '-c', 'lmp -h | grep -m1 Simulator'])}",
               f"python: {command_output([PY, '--version'])}",
-              f"nbs commit: {command_output(['git', '-C', ROOT, 'rev-parse', 'HEAD'])}"
-              + (" (work tree has changes in src/ or include/)" if command_output(
-                  ['git', '-C', ROOT, 'status', '--porcelain', '--', 'src', 'include'])
-                 else ""),
+              f"nbs build: {nbs_build_id(a.build)} (the commit nbs_bench was linked from; '+': "
+              "src/ or include/ had changes then)",
               "debian packages:"]
     pk = command_output(["dpkg-query", "-W", "-f", "${Package} ${Version}\\n", "lammps",
                          "python3-scipy", "python3-numpy", "python3-matplotlib",
