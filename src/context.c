@@ -187,6 +187,9 @@ int nbs__threads(const nbs_context *ctx, int64_t useful) {
 #endif
 }
 
+/* Tried and left out: madvise(MADV_HUGEPAGE) on the new block (this machine's transparent
+ * huge pages are given on request only): 3D cellsort, N = 1e6, 30.3 -> 29.6 ns per element,
+ * N = 1e7 42.3 -> 58.5 (interleaved, min of 5). */
 nbs_status nbs__work_reserve(nbs_context *ctx, size_t bytes) {
   if (bytes <= ctx->work_size) return NBS_OK;
   void *p = nbs__alloc(ctx, bytes);

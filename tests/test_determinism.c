@@ -388,8 +388,9 @@ static void det_step(nbs_context *ctx, nbs_context *ref_ctx, const scene *s,
  * them far, replace them, change n, the dimension or the radii, or follow another
  * algorithm in the same context, every detection gives the bytes of a detection from
  * scratch, in order, in both modes, through the buffer and a callback, with 1 to 3
- * threads (on enough elements for cellsort to use them). The statistics must show the order reused with elements re-sorted on small
- * steps, and not reused on an input of other elements, so that both paths are taken. */
+ * threads (on enough elements for cellsort to use them). The statistics must show the order
+ * reused with elements re-sorted on small steps, and not reused on an input of other
+ * elements, so that both paths are taken. */
 static void test_time_steps(void) {
   const det_kind kinds[] = {DET_UNIFORM, DET_QUANTIZED, DET_RADII};
   for (int dim = 2; dim <= 3; dim++) {

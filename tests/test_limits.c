@@ -536,8 +536,8 @@ static void test_max_pairs_exact(void) {
 
 /* ---- sizes ------------------------------------------------------------------------------ */
 
-/* Radii from 0.5 down to 5e-7 (ratio 1e6): small elements in touching rows, some touching the large ones at exactly rl + rs, large ones touching each
- * other at exactly 1. */
+/* Radii from 0.5 down to 5e-7 (ratio 1e6): small elements in touching rows, some touching
+ * the large ones at exactly rl + rs, large ones touching each other at exactly 1. */
 static void test_radius_ratio(void) {
   for (int dim = 2; dim <= 3; dim++) {
     const int64_t big = 12, small = 1500, n = big + small;

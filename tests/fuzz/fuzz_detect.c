@@ -8,8 +8,9 @@
  *   - the status is OK, or exactly one of the documented refusals, predicted here from the
  *     grid of src/input.c: screening NBS_ERR_EXTENT / NBS_ERR_BUDGET, nbs NBS_ERR_EXTENT /
  *     NBS_ERR_BUDGET, cellsort NBS_ERR_EXTENT, NBS_ERR_PAIRS when the context's max_pairs
- *     is passed; auto, sorting and direct never refuse finite input. Invalid input (a raw NaN or infinity, a radius
- *     that rounds to 0) must give NBS_ERR_COORD / NBS_ERR_RADIUS naming the first element;
+ *     is passed; auto, sorting and direct never refuse finite input. Invalid input (a raw
+ *     NaN or infinity, a radius that rounds to 0) must give NBS_ERR_COORD / NBS_ERR_RADIUS
+ *     naming the first element;
  *   - statistics agree with the pairs; list heads are empty after every detection (or the
  *     layout is forgotten after an error); a repeated detection gives the same bytes in the
  *     same order; the context's byte count matches its allocator's; nothing leaks;
@@ -324,7 +325,8 @@ static bool fz_contains(const fz_pairs *super, const fz_pairs *sub) {
 }
 
 static bool fz_equal(const fz_pairs *a, const fz_pairs *b) {
-  return a->count == b->count && (a->count == 0 || memcmp(a->p, b->p, a->count * sizeof *a->p) == 0);
+  return a->count == b->count &&
+         (a->count == 0 || memcmp(a->p, b->p, a->count * sizeof *a->p) == 0);
 }
 
 /* The contract, evaluated here with the same operations in the same order. */
@@ -526,7 +528,9 @@ static nbs_status fz_detect(const fz_run *R, nbs_algorithm algo, nbs_mode mode, 
   }
 
   if (s->callback) {
-    if (p != NULL || count != 0) FZ_FAIL(s, "%s %s: buffer not empty in callback mode", name, mname);
+    if (p != NULL || count != 0) {
+      FZ_FAIL(s, "%s %s: buffer not empty in callback mode", name, mname);
+    }
   } else {
     if (count > FZ_MAX_PAIRS) FZ_FAIL(s, "%s %s: %zu pairs, more than exist", name, mname, count);
     if (count) memcpy(out->p, p, count * sizeof *p);
@@ -577,7 +581,8 @@ static void fz_step(fz_run *R, nbs_algorithm algo) {
   for (int k = 0; k < s->n; k++) {
     for (int a = 0; a < s->dim; a++) {
       const int i = k * s->dim + a;
-      const unsigned b = rd.left ? fz_u8(&rd) : ((3 * k + a) % 5 == 0 ? (unsigned)(k % 7 + 5) : 128);
+      const unsigned b =
+          rd.left ? fz_u8(&rd) : ((3 * k + a) % 5 == 0 ? (unsigned)(k % 7 + 5) : 128);
       x[i] = s->x[i] + (b < 128 ? (double)((int)(b % 16) - 8) / 16.0 * s->unit : 0.0);
     }
   }
