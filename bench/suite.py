@@ -514,7 +514,40 @@ def summary(rows, n_head):
     out.append("| target | measured | status |")
     out.append("|---|---|---|")
     out += t
+    out += consistency(rows)
     return "\n".join(out) + "\n"
+
+
+# Differences beyond this between two rows of one configuration mark a disturbed run.
+DISTURBED = 1.15
+
+
+def consistency(rows):
+    """The same configuration is measured twice in a run: nbs-auto and nbs-cellsort on their
+    own, and again (-1t) alternated with their two-thread runs, all on one thread. Where the
+    two differ by more than DISTURBED, the machine was disturbed during one of them (this
+    VM's neighbours come and go), and every target read from those rows is suspect: the
+    lines below say which, so that a reader does not take noise for a result."""
+    ok = {(r["scene"], r["dim"], r["order"], r["N"], r["tool"]): r for r in rows
+          if r["status"] == "ok" and r["ns_per_element"] and not r["spacing"]}
+    bad = []
+    for (scene, dim, order, n, tool), r in sorted(ok.items()):
+        if tool not in ("nbs-auto", "nbs-cellsort") or r.get("threads") not in ("", "1"):
+            continue
+        twin = ok.get((scene, dim, order, n, tool + "-1t"))
+        if not twin:
+            continue
+        a, b = nsel(r), nsel(twin)
+        if max(a, b) > DISTURBED * min(a, b):
+            bad.append(f"| {scene} {dim}D {order} N={fmt_n(int(n))} | {tool} {a:.1f} ns, "
+                       f"{tool}-1t {b:.1f} ns | x{max(a, b) / min(a, b):.2f} |")
+    if not bad:
+        return []
+    return ["", "### Disturbed rows\n",
+            f"One thread, the same code and scene, measured twice in this run, more than "
+            f"{DISTURBED:.2f}x apart: the machine was disturbed, and targets read from these "
+            "rows are not results.\n", "| case | the two measurements | apart |",
+            "|---|---|---|", *bad]
 
 
 STYLE = {"nbs-auto": ("C0", "o"), "nbs-auto-2t": ("C0", "1"), "nbs-auto-steps": ("navy", "+"),
