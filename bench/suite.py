@@ -305,15 +305,13 @@ def machine_name():
 
 def nbs_build_id(build):
     """The commit the drivers were linked from, '+' when src/ or include/ had changes then:
-    written by the build after each link of nbs_bench (bench/build_id.cmake); else (a tree
-    built before that existed) the work tree's state now."""
+    written by the build after each link of nbs_bench (bench/build_id.cmake). A tree linked
+    before that existed has no record: "unknown", since the work tree's state now need not
+    be the one it was built from."""
     try:
         return open(os.path.join(build, "nbs_build_id")).read().strip()
     except OSError:
-        pass
-    head = command_output(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"])
-    dirty = command_output(["git", "-C", ROOT, "status", "--porcelain", "--", "src", "include"])
-    return head + ("+" if dirty else "")
+        return "unknown"
 
 
 def command_output(cmd):
