@@ -198,8 +198,11 @@ static void test_time_steps(void) {
 
 /* cellsort on s with 1 to max_threads threads: one thread finds NBS's contacts (NBS is
  * checked against direct in the tests above), and every other number of threads gives the
- * same pairs in the same order as one. */
-static void check_cellsort_threads(const scene *s, int max_threads, const char *label) {
+ * same pairs in the same order as one. With min_outliers >= 0, every detection must have
+ * sorted its keys by a crowded core (nbs__cs_core), leaving out between min_outliers and
+ * n / 16 elements. */
+static void check_cellsort_threads(const scene *s, int max_threads, const char *label,
+                                   int64_t min_outliers) {
   nbs_input in = scene_input(s);
   nbs_pair *first = NULL;
   size_t first_count = 0;
@@ -211,6 +214,11 @@ static void check_cellsort_threads(const scene *s, int max_threads, const char *
     nbs_detect_def ddef = nbs_default_detect_def();
     ddef.algorithm = NBS_CELLSORT;
     ASSERT_OK(nbs_detect(ctx, &in, &ddef));
+    if (min_outliers >= 0) {
+      CHECK_MSG(ctx->cs_outliers >= min_outliers && ctx->cs_outliers <= s->n / 16,
+                "%s, %d threads: %lld outliers, expected %lld to %lld", label, threads,
+                (long long)ctx->cs_outliers, (long long)min_outliers, (long long)(s->n / 16));
+    }
     size_t count;
     const nbs_pair *p = nbs_pairs(ctx, &count);
     if (threads == 1) {
@@ -237,7 +245,7 @@ static void check_cellsort_threads(const scene *s, int max_threads, const char *
 /* cellsort's threads (check_cellsort_threads) for 1 to 4 threads. Uniform and wide scenes take
  * the radix sort's top digit first (nbs__radix); the clustered one, on 300000 elements, puts
  * most keys under one top digit, which the sort then leaves for its passes by digit (2D),
- * or has unpacked keys (3D). */
+ * or has unpacked keys, sorted by its crowded core (3D). */
 static void test_threads(void) {
   static const scene_kind kinds[] = {SCENE_UNIFORM, SCENE_WIDE, SCENE_CLUSTERED};
   for (int dim = 2; dim <= 3; dim++) {
@@ -251,7 +259,7 @@ static void test_threads(void) {
       ASSERT_MSG(scene_generate(&def, &s, err, sizeof err) == 0, "%s", err);
       char label[64];
       snprintf(label, sizeof label, "%dD %s", dim, scene_kind_name(kinds[kk]));
-      check_cellsort_threads(&s, 4, label);
+      check_cellsort_threads(&s, 4, label, dim == 3 && kinds[kk] == SCENE_CLUSTERED ? 1 : -1);
       scene_free(&s);
     }
   }
@@ -335,7 +343,64 @@ static void test_bucket_scratch(void) {
       s.coords[2 * e + 1] = 16.0 * (double)j;
     }
   }
-  check_cellsort_threads(&s, 2, "bucket_scratch");
+  check_cellsort_threads(&s, 2, "bucket_scratch", -1);
+  scene_free(&s);
+}
+
+/* cellsort's crowded core (nbs__cs_core), where its box cuts through a crowd: 90% of the
+ * elements in a block [0, bx] x [0, h]^(dim - 1) at the fraction f, 9% in a tail before it
+ * on x, [-tx, 0], at half that fraction, and 1% far out in pairs that touch, at +-far_yz on
+ * the other axes (and +-far_x on x, or else within the block's x), which make the keys too
+ * wide to share a word with the element. On x the core may leave out only n / (16 dim)
+ * elements, fewer than the tail and the far ones together, so the shortest run of bins
+ * that holds the rest starts within the tail (the thinner end), and elements on either
+ * side of the core box's face touch. In element order shuffled, so that every thread's
+ * part holds outliers. */
+static void core_scene(int dim, int64_t n, double f, double h, double far_x, double far_yz,
+                       uint64_t seed, scene *s) {
+  memset(s, 0, sizeof *s);
+  s->dim = dim;
+  s->n = n;
+  s->diameter = 1.0;
+  s->coords = malloc((size_t)n * (size_t)dim * sizeof *s->coords);
+  const double per = (dim == 3 ? 0.5235987755982988 : 0.7853981633974483) / f;
+  const double across = dim == 3 ? h * h : h;
+  const int64_t block = n * 90 / 100, tail = n * 9 / 100;
+  const double bx = (double)block * per / across, tx = 2.0 * (double)tail * per / across;
+  uint64_t state = seed;
+  for (int64_t e = 0; e < n; e++) {
+    double *x = s->coords + e * dim;
+    if (e < block + tail) {
+      x[0] = e < block ? bx * next_unit(&state) : -tx * next_unit(&state);
+      for (int a = 1; a < dim; a++) x[a] = h * next_unit(&state);
+    } else if ((e - block - tail) % 2 == 0) {
+      x[0] = far_x > 0.0 ? (next_unit(&state) < 0.5 ? -far_x : far_x) : bx * next_unit(&state);
+      for (int a = 1; a < dim; a++) x[a] = next_unit(&state) < 0.5 ? -far_yz : far_yz;
+      x[dim - 1] += 5.0 * (double)(e - block - tail); /* the pairs apart from each other */
+    } else {
+      for (int a = 0; a < dim; a++) x[a] = x[a - dim];
+      x[0] += 0.6; /* touching the one before */
+    }
+  }
+  for (int64_t e = n - 1; e > 0; e--) {
+    const int64_t o = (int64_t)(next_unit(&state) * (double)(e + 1));
+    for (int a = 0; a < dim; a++) {
+      const double t = s->coords[e * dim + a];
+      s->coords[e * dim + a] = s->coords[o * dim + a];
+      s->coords[o * dim + a] = t;
+    }
+  }
+}
+
+static void test_core(void) {
+  scene s;
+  /* 3D: x 7 bits of cells, y and z 26: 59 + 16 for the element */
+  core_scene(3, 60000, 0.3, 30.0, 0.0, 0x1p25, 99, &s);
+  check_cellsort_threads(&s, 4, "3D core", 601);
+  scene_free(&s);
+  /* 2D: x 17 bits, y 30: 47 + 17 */
+  core_scene(2, 100000, 0.5, 50.0, 40000.0, 0x1p28, 98, &s);
+  check_cellsort_threads(&s, 4, "2D core", 1001);
   scene_free(&s);
 }
 
@@ -348,6 +413,7 @@ int main(int argc, char **argv) {
       {"threads", test_threads},
       {"shared_digit", test_shared_digit},
       {"bucket_scratch", test_bucket_scratch},
+      {"core", test_core},
   };
   return test_main(argc, argv, tests, sizeof tests / sizeof *tests);
 }
