@@ -1347,9 +1347,10 @@ nbs__cs_core_split(const nbs__cs_keying *kg, const double *restrict x, int dim, 
  * Measured (3D, N = 1e6, one thread, interleaved, min of 5 processes, ns per element): the
  * sparse scene 46.5 -> 41.4 and the clustered one 39.4 -> 34.8, with uniform at 31.2 in the
  * same run; two threads (min of 4) 32.7 -> 23.9 and 27.2 -> 21.6, though the sample and the
- * merge run on one; sparse at N = 1e7 50.4 -> 43.0. Returns false, having written nothing the caller needs, where the core's keys
- * would not fit a word with the element either. Scratch: the coordinate arrays (the
- * histograms, the core's words and the bucket scratch, the outliers at their end). */
+ * merge run on one; sparse at N = 1e7 50.4 -> 43.0. Returns false, having written nothing
+ * the caller needs, where the core's keys would not fit a word with the element either.
+ * Scratch: the coordinate arrays (the histograms, the core's words and the bucket scratch,
+ * the outliers at their end). */
 static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_keying *kg,
                          int eb, int bits, uint32_t *hist, int threads) {
   const int32_t n = c->n;
