@@ -1363,7 +1363,7 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
   const int wd[3] = {c->bx, c->by, dim == 3 ? bits - c->bx - c->by : 0};
   uint64_t mask[3] = {0, 0, 0};
   /* a. the histograms of a sample, every stride-th element (about 2^16 of them), in the
-   * coordinate arrays; at most 2^12 bins per axis, and at most n */
+   * coordinate arrays: at most 2^12 bins per axis, and at most 2n, which they hold */
   int hb = 0, sh[3] = {0, 0, 0};
   while (hb < NBS__CS_CORE_BINS && ((int64_t)2 << hb) <= 2 * (int64_t)n) hb++;
   for (int a = 0; a < dim; a++) {
@@ -1400,8 +1400,7 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
   }
   if (cb + eb > 63) return false;
   /* b. the core's words at the start of each thread's part of the coordinate arrays, the
-   * outliers at the start of its part of key[] and idx[] (each written where, or below
-   * where, it is read) */
+   * outliers at the start of its part of key[] and idx[] */
   uint64_t *A = (uint64_t *)(void *)c->xs;
   int32_t from[NBS__THREADS_MAX + 1], nc[NBS__THREADS_MAX], no[NBS__THREADS_MAX];
   for (int t = 0; t <= threads; t++) from[t] = nbs__chunk(n, t, threads);
