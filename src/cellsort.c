@@ -1285,34 +1285,33 @@ static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
   return true;
 }
 
-/* Step b of nbs__cs_core for the elements [f, to): each one's key computed again, as
- * nbs__cs_cellkey does, field by field; the core's words to A, the outliers to key[] and
- * idx[], both from their start. Everything the loop needs in locals (dim a constant where
- * it is inlined): in the OpenMP region's own code, with the key's parts behind pointers,
+/* Step b of nbs__cs_core for the elements [f, to): each one's key computed again
+ * (nbs__cs_cellkey); the core's words to A, the outliers to key[] and idx[], both from
+ * their start. The keying and its grid are copied to locals, which stay in registers (dim
+ * a constant where this is inlined): read through pointers in the OpenMP region's own code,
  * the pass took twice as long. */
 static inline __attribute__((always_inline)) void
 nbs__cs_core_split(const nbs__cs_keying *kg, const double *restrict x, int dim, int32_t f,
                    int32_t to, const uint64_t lo[3], const int cw[3], int eb,
                    uint64_t *restrict A, uint64_t *restrict key, int32_t *restrict idx,
                    int32_t *n_core, int32_t *n_out) {
-  const nbs__grid *g = kg->g;
-  const double lo_x = kg->lo_x, inv_fine = kg->inv_fine, inv = g->inv_edge;
-  const double lo_y = g->lo[1], lo_z = dim == 3 ? g->lo[2] : 0.0;
-  const int sy = kg->sy, sz = kg->sz, c0 = cw[0], c1 = cw[1];
+  const nbs__grid g = *kg->g;
+  nbs__cs_keying k1 = *kg;
+  k1.g = &g;
+  k1.dim = dim;
+  const int sy = k1.sy, sz = k1.sz, c0 = cw[0], c1 = cw[1];
+  const uint64_t mx = ((uint64_t)1 << sy) - 1, my = ((uint64_t)1 << (sz - sy)) - 1;
   const uint64_t l0 = lo[0], l1 = lo[1], l2 = lo[2];
   const uint64_t s0 = (uint64_t)1 << cw[0], s1 = (uint64_t)1 << cw[1], s2 = (uint64_t)1 << cw[2];
   int32_t cc = 0, oc = 0;
   for (int32_t k = f; k < to; k++) {
-    const double *xk = x + (size_t)k * (size_t)dim;
-    /* the same expressions as nbs__cs_cellkey's and nbs__cell's */
-    const uint64_t ix = (uint64_t)((xk[0] - lo_x) * inv_fine);
-    const uint64_t iy = (uint64_t)(int32_t)((xk[1] - lo_y) * inv);
-    const uint64_t iz = dim == 3 ? (uint64_t)(int32_t)((xk[2] - lo_z) * inv) : 0;
-    const uint64_t ox = ix - l0, oy = iy - l1, oz = iz - l2;
+    const uint64_t kk = nbs__cs_cellkey(&k1, x + (size_t)k * (size_t)dim);
+    const uint64_t ox = (kk & mx) - l0, oy = ((kk >> sy) & my) - l1;
+    const uint64_t oz = dim == 3 ? (kk >> sz) - l2 : 0;
     if (ox < s0 && oy < s1 && oz < s2) {
       A[cc++] = ((oz << c1 | oy) << c0 | ox) << eb | (uint64_t)k;
     } else {
-      key[oc] = iz << sz | iy << sy | ix;
+      key[oc] = kk;
       idx[oc++] = k;
     }
   }
