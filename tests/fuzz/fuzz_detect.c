@@ -380,6 +380,14 @@ static void fz_free_fn(void *opaque, void *ptr, size_t size) {
 
 /* ---- one detection, checked ------------------------------------------------------------- */
 
+/* Detections that took cellsort's crowded-core path (nbs__cs_core): replay prints it. */
+static long fz_core_detections;
+
+void fz_summary(void);
+void fz_summary(void) {
+  printf("%ld detections took cellsort's crowded-core path\n", fz_core_detections);
+}
+
 typedef struct fz_run {
   const fz_scene *s;
   nbs_context *ctx;
@@ -486,7 +494,9 @@ static nbs_status fz_detect(const fz_run *R, nbs_algorithm algo, nbs_mode mode, 
     def.user = out;
   }
   R->alloc->failed = false;
+  R->ctx->cs_outliers = -1; /* cellsort sets it where it sorts a crowded core apart */
   nbs_status st = nbs_detect(R->ctx, &R->in, &def);
+  if (st == NBS_OK && R->ctx->cs_outliers >= 0) fz_core_detections++;
   if (out->overflow) FZ_FAIL(s, "%s %s: the callback received more pairs than exist", name, mname);
 
   nbs_status want = fz_expected(R, algo);

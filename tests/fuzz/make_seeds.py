@@ -221,6 +221,34 @@ def detect_seeds():
                         s.body += op(6) + raw(v + 0.37 * a)
                 seeds[f"folded_{dim}d_{unit.replace('/', '_')}_{origin}"] = s
 
+    # cellsort's crowded core (nbs__cs_core): a crowd, chains touching across it, and as
+    # many elements far out as the core box may leave out (the sample's 1 / (16 dim)), so far
+    # that the keys need more bits than a word has beside the element (about 60 of 64)
+    # while the crowd's would fit: the core is sorted apart and merged with the outliers.
+    # Some crowd elements sit a few cells out, where the core box's face may cut between
+    # elements that touch.
+    crng = random.Random(20261124)
+    for dim in (2, 3):
+        far = 2.6e8 if dim == 2 else 1.1e6
+        for variant in ("crowd", "tail", "radii"):
+            s = Seed(dim=dim, n=64, unit="d/2" if variant != "tail" else "d",
+                     radii=(variant == "radii"))
+            if variant == "radii":
+                s.body += bytes(crng.choice((0, 2, 3, 4)) for _ in range(64))
+            outliers = 2 if dim == 2 else 1
+            for k in range(64 - outliers):
+                for a in range(dim):
+                    if k and crng.randrange(3) == 0:
+                        s.body += op(crng.choice((2, 3)), crng.randrange(32))
+                    elif variant == "tail" and a == 0 and k % 8 == 7:
+                        s.body += op(0, crng.randrange(32))
+                    else:
+                        s.body += op(7) + struct.pack("<H", crng.randrange(16384))
+            for k in range(outliers):
+                for a in range(dim):
+                    s.body += op(6) + raw((far if k == 0 else -far) * (1.0 + 0.01 * a))
+            seeds[f"core_{dim}d_{variant}"] = s
+
     for name, s in seeds.items():
         write("detect", name, s.data())
     return len(seeds)

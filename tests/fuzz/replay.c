@@ -11,6 +11,8 @@
 #include <sys/stat.h>
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+/* A target may say what its inputs reached. */
+void fz_summary(void) __attribute__((weak));
 
 static long replayed;
 
@@ -74,5 +76,6 @@ int main(int argc, char **argv) {
     return 1;
   }
   printf("%ld inputs replayed without a finding\n", replayed);
+  if (fz_summary) fz_summary();
   return bad;
 }
