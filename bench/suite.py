@@ -102,11 +102,13 @@ class Suite:
                   str(a.direct_max), "--fresh"]
         cmd = [f"{self.bin}/nbs_bench", "--scene", gen_scene, "--dim", str(dim), "--n", str(n),
                "--fraction", repr(fraction), "--seed", str(a.seed), "--write", path] + timing
+        algs = []
         if "nbs" not in tools:
-            cmd += ["--algorithms", "none"]
+            algs = ["--algorithms", "none"]
         elif a.algorithms != ["all"]:
-            cmd += ["--algorithms", ",".join(x for x in a.algorithms
+            algs = ["--algorithms", ",".join(x for x in a.algorithms
                                              if x != "direct" or n <= a.direct_max)]
+        cmd += algs
         if order == "sorted":
             cmd.append("--sorted")
         results, err = self.run_cmd(cmd, "nbs", a.timeout)
@@ -159,9 +161,10 @@ class Suite:
         for _ in range(a.thread_rounds if talgs or salgs else 0):
             one_round()
         # Disturbed: a one-thread row and its -1t twin (the same code on the same file) more
-        # than DISTURBED apart. The machine was disturbed during one of them; the rows of
-        # this case are measured again after a pause, up to --retries times, each row
-        # keeping its fastest process (the one-thread rows of the first process included).
+        # than DISTURBED apart. The machine was disturbed during one of them; the nbs rows
+        # of this case (every algorithm of the first process, and a round of the
+        # alternation) are measured again after a pause, up to --retries times, each row
+        # keeping its fastest process.
         first = {r["tool"]: r for r in results}
 
         def disturbed():
@@ -181,8 +184,7 @@ class Suite:
                 f"{retried} of {a.retries}")
             time.sleep(a.retry_wait)
             res, err = self.run_cmd([f"{self.bin}/nbs_bench", "--file", path, "--dim",
-                                     str(dim), "--algorithms", ",".join(talgs)] + timing,
-                                    "nbs", a.timeout)
+                                     str(dim)] + algs + timing, "nbs", a.timeout)
             for r in res:
                 old = first.get(r.get("tool"))
                 if old is not None and r.get("status") == "ok" and old.get("status") == "ok":
@@ -190,9 +192,8 @@ class Suite:
                         results[results.index(old)] = r
                         first[r["tool"]] = r
             one_round()
-        for x in talgs if retried else []:
-            r = first.get(f"nbs-{x}")
-            if r and r.get("status") == "ok":
+        for r in results if retried else []:
+            if r.get("status") == "ok" and r.get("tool", "").startswith("nbs-"):
                 r["note"] = f"fastest of {retried + 1} processes (the case was disturbed)"
         for r in best.values():
             if r.get("status") == "ok":
