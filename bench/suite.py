@@ -215,6 +215,19 @@ class Suite:
             res, err = self.run_peer(peer, path, dim)
             if err and any(r.get("status") != "ok" for r in res):
                 res[0]["note"] = err.splitlines()[-1][:200]
+            # LAMMPS, the peer of the targets, in --lammps-rounds processes, keeping the
+            # fastest: a disturbed process would otherwise flatter nbs's ratio to it, and
+            # no twin row shows a peer's disturbance
+            rounds = a.lammps_rounds if peer.startswith("lammps") else 1
+            for _ in range(rounds - 1):
+                if len(res) != 1 or res[0].get("status") != "ok":
+                    break
+                more, err = self.run_peer(peer, path, dim)
+                if (len(more) == 1 and more[0].get("status") == "ok" and
+                        float(more[0]["seconds"]) < float(res[0]["seconds"])):
+                    res = more
+            if rounds > 1 and len(res) == 1 and res[0].get("status") == "ok":
+                res[0]["note"] = f"fastest of {rounds} processes"
             results += res
         if not a.keep_files:
             os.remove(path)
@@ -785,6 +798,9 @@ def main(argv):
     ap.add_argument("--nosort-max-n", type=float, default=1e6,
                     help="largest N for lammps-nosort")
     ap.add_argument("--lammps-max-bins", type=float, default=2e8)
+    ap.add_argument("--lammps-rounds", type=int, default=2,
+                    help="LAMMPS processes per case (each --peer-repeats steps); the row "
+                         "keeps the fastest")
     ap.add_argument("--sweep-n", type=float, default=1e5,
                     help="N of the density sweep (0: no sweep)")
     ap.add_argument("--spacings", default="1,2,5,10,20,50,100,200", help="S/D of the sweep")
@@ -811,7 +827,7 @@ def main(argv):
     if a.smoke:
         a.n, a.sweep_n, a.spacings = "1000", 2000, "1,10,200"
         a.repeats, a.peer_repeats, a.min_time, a.thread_rounds = 2, 1, 0.0, 1
-        a.retries = 0
+        a.retries, a.lammps_rounds = 0, 1
         a.nosort_max_n = 1000
     a.n = number_list(a.n, int)
     a.dims = number_list(a.dims, int)
