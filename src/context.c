@@ -273,6 +273,7 @@ nbs_status nbs_context_create(const nbs_context_def *def, nbs_context **out) {
   ctx->simd = nbs__cellsort_simd();
   ctx->bytes = ctx->peak_bytes = sizeof *ctx;
   ctx->error_element = -1;
+  ctx->cs_outliers = -1;
   *out = ctx;
   return NBS_OK;
 }

@@ -100,7 +100,7 @@ struct nbs_context {
    * detections sort from scratch without trying: 2, 4, ... 64 after 1, 2, ... 6 failures in
    * a row (cs_warm_fails), so that steps that keep failing stop paying for the try. */
   int cs_warm_wait, cs_warm_fails;
-  /* How the last cellsort detection from scratch sorted unpacked keys: -1 by the whole key,
+  /* How the last cellsort detection sorted its keys: -1 by the whole key (and before any),
    * else by its crowded core, this many elements (the outliers) apart (nbs__cs_core). Read
    * by the tests, which cannot see it through the API. */
   int64_t cs_outliers;

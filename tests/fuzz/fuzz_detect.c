@@ -494,9 +494,7 @@ static nbs_status fz_detect(const fz_run *R, nbs_algorithm algo, nbs_mode mode, 
     def.user = out;
   }
   R->alloc->failed = false;
-  R->ctx->cs_outliers = -1; /* cellsort sets it where it sorts a crowded core apart */
   nbs_status st = nbs_detect(R->ctx, &R->in, &def);
-  if (st == NBS_OK && R->ctx->cs_outliers >= 0) fz_core_detections++;
   if (out->overflow) FZ_FAIL(s, "%s %s: the callback received more pairs than exist", name, mname);
 
   nbs_status want = fz_expected(R, algo);
@@ -535,6 +533,9 @@ static nbs_status fz_detect(const fz_run *R, nbs_algorithm algo, nbs_mode mode, 
   if (st != NBS_OK) {
     if (p != NULL || count != 0) FZ_FAIL(s, "%s %s: pairs left after an error", name, mname);
     return st;
+  }
+  if (stats.algorithm == NBS_CELLSORT && s->n >= 2 && R->ctx->cs_outliers >= 0) {
+    fz_core_detections++;
   }
 
   if (s->callback) {
