@@ -178,10 +178,12 @@ class Suite:
             return out
 
         retried = 0
-        while retried < a.retries and disturbed():
+        while retried < a.retries:
+            which = disturbed()
+            if not which:
+                break
             retried += 1
-            log(f"   disturbed ({', '.join(disturbed())}): measured again, "
-                f"{retried} of {a.retries}")
+            log(f"   disturbed ({', '.join(which)}): measured again, {retried} of {a.retries}")
             time.sleep(a.retry_wait)
             res, err = self.run_cmd([f"{self.bin}/nbs_bench", "--file", path, "--dim",
                                      str(dim)] + algs + timing, "nbs", a.timeout)
@@ -192,9 +194,10 @@ class Suite:
                         results[results.index(old)] = r
                         first[r["tool"]] = r
             one_round()
-        for r in results if retried else []:
-            if r.get("status") == "ok" and r.get("tool", "").startswith("nbs-"):
-                r["note"] = f"fastest of {retried + 1} processes (the case was disturbed)"
+        if retried:
+            for r in results:
+                if r.get("status") == "ok" and r.get("tool", "").startswith("nbs-"):
+                    r["note"] = f"fastest of {retried + 1} processes (the case was disturbed)"
         for r in best.values():
             if r.get("status") == "ok":
                 what = ("time steps: " if "-steps" in r["tool"] else "")
