@@ -38,6 +38,12 @@
  *      about 5 kernel steps and 5/8 of a window update in 3D, instead of 9 candidate tests
  *      and 5 window updates, each ending in a mispredicted branch, for one element at a time
  *      (measured at N = 1e6, one thread: the sweep went from 60 to about 20 ns per element).
+ *      In 2D a row of fewer than 4 elements is swept element by element instead, each
+ *      element's ranges counted among the sixteen keys before it, with nothing carried from
+ *      one element to the next (nbs__cs_sweep2_body): a sparse domain's rows hold an element
+ *      or two, and by blocks each row waited on finding its end, the row below and its
+ *      windows (2D huge domain, N = 1e6, one thread, interleaved, min of 5: 23.8 -> 18.8 ns
+ *      per element; uniform, whose rows are long, 15.7 and 15.8).
  *      An AVX2 kernel (two registers of 4 lanes, and a table of permutations for the
  *      compress that AVX2 lacks) serves processors without AVX-512, and a generic kernel in
  *      plain C any other; all three give the same bytes in the same order (3D, N = 1e6, on
@@ -891,65 +897,125 @@ static int32_t nbs__cs_lower(const uint64_t *key, int32_t hi, uint64_t k) {
   return lo;
 }
 
-/* Sweeps the rows that start in [from, to) of the cell order (from and to on row
- * boundaries). Each row is cut into blocks of NBS__CS_LANES consecutive elements. A block
- * meets itself, the elements before it in its own row within one cell edge in x of its first
- * element, and a window of each neighbouring row of the half mask: the elements within one
- * cell edge in x either side of the block. On the x axis the key counts sub-cells of
+/* The blocks of the row [a, b) of the cell order. Each row is cut into blocks of
+ * NBS__CS_LANES consecutive elements. A block meets itself, the elements before it in its
+ * own row within one cell edge in x of its first element, and a window of each of the
+ * `rows` neighbouring rows of the half mask: the elements within one cell edge in x either
+ * side of the block. Neighbouring row r's keys start at base[r]; its window starts at
+ * q0[r] = q1[r] (q0[r] < 0: no such row). On the x axis the key counts sub-cells of
  * edge / fine (8 unless the key needs the bits), so these windows hug the block. Every
  * window only moves forwards, so finding them costs O(1) per block and row; the kernel then
  * tests one window element against the whole block at once. */
 static inline __attribute__((always_inline)) nbs_status
-nbs__cs_sweep_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
-                   nbs__cs_count_fn below, nbs__cs_count_fn upto) {
-  nbs__sink local = *out; /* kept in registers, written back at the end */
-  nbs__sink *s = &local;
-  nbs_status st = NBS_OK;
+nbs__cs_row_blocks(const nbs__cs *c, nbs__sink *s, int32_t a, int32_t b, int rows,
+                   const uint64_t *base, int32_t *q0, int32_t *q1, nbs__cs_count_fn below,
+                   nbs__cs_count_fn upto) {
   const int dim = c->dim;
   /* key[q] >> ks is element q's key; a bound b on keys is b << ks on the words (below), or
    * b << ks | low (up to) */
   const uint64_t *key = c->key;
-  const int bx = c->bx, by = c->by, ks = c->ks, kx = bx + ks;
-  const uint64_t low = ((uint64_t)1 << ks) - 1;
-  const uint64_t mx = ((uint64_t)1 << bx) - 1, my = ((uint64_t)1 << by) - 1;
+  const int ks = c->ks;
+  const uint64_t low = ((uint64_t)1 << ks) - 1, mx = ((uint64_t)1 << c->bx) - 1;
   const uint64_t fine = c->fine;
+  nbs_status st = NBS_OK;
+  int32_t w = a;
+  for (int32_t c0 = a; c0 < b && st == NBS_OK; c0 += NBS__CS_LANES) {
+    const int lanes = b - c0 < NBS__CS_LANES ? (int)(b - c0) : NBS__CS_LANES;
+    /* The sweep's own rows are its one stream of memory not read before: the gather (or
+     * the start from the last order) wrote them, and at scale they have left the caches
+     * since; the windows of the neighbouring rows read what the own rows read a row or a
+     * layer before. Asked for NBS__CS_SWEEP_AHEAD places ahead, which the processor's
+     * prefetchers, following some twenty streams, did not do as well (3D, N = 1e6, one
+     * thread: sweep 19.8 -> 18.2 ns per element; 1e7: 21.9 -> 18.9; 2D 1e6: 7.2 -> 6.3;
+     * asking for the windows' streams too gained nothing). */
+    const int32_t ahead = c0 + NBS__CS_SWEEP_AHEAD < c->n ? c0 + NBS__CS_SWEEP_AHEAD : c0;
+    __builtin_prefetch(key + ahead);
+    __builtin_prefetch(c->xs + ahead);
+    __builtin_prefetch(c->ys + ahead);
+    if (dim == 3) __builtin_prefetch(c->zs + ahead);
+    if (c->rs) __builtin_prefetch(c->rs + ahead);
+    if (c->istep == 1) __builtin_prefetch(c->ids + ahead); /* unpacked keys */
+    const uint64_t k0 = key[c0] >> ks;
+    const uint64_t fa = k0 & mx, fb = (key[c0 + lanes - 1] >> ks) & mx;
+    nbs__cs_ranges rg;
+    rg.count = 0;
+    /* each neighbouring row: a window of fa - fine .. fb + fine (a loop, not unrolled: with
+     * 3D's four rows a constant, GCC unrolled it, and the detection was 3-5% slower) */
+#pragma GCC unroll 1
+    for (int r = 0; r < rows; r++) {
+      if (q0[r] < 0) continue;
+      const uint64_t lo = base[r] + (fa > fine ? fa - fine : 0);
+      const uint64_t hi = base[r] + (mx - fb > fine ? fb + fine : mx);
+      /* both stop at a at the latest: key[a] > base + mx. Each edge moves from where it
+       * was, so that the two are independent chains of loads (q1 >= q0 all the same: the
+       * first key above hi is not before the first key from lo on); a sparse row's blocks
+       * wait for one edge at a time instead of two (2D huge domain, N = 1e6: sweep 14.3 ->
+       * 13.0 ns per element) */
+      NBS__CS_ADVANCE(key, q0[r], below, lo << ks);
+      NBS__CS_ADVANCE(key, q1[r], upto, hi << ks | low);
+      rg.q0[rg.count] = q0[r];
+      rg.q1[rg.count] = q1[r];
+      rg.count += q1[r] > q0[r];
+    }
+    /* own row: the elements before the block from fa - fine on (none before a row's first
+     * block: no search there, which spares sparse scenes, whose rows hold one element or
+     * two, a load and compare per row: huge domain, N = 1e6, sweep 13.5 -> 12.6 ns per
+     * element in 2D, 16.7 -> 15.7 in 3D), and the block itself */
+    if (c0 > a) NBS__CS_ADVANCE(key, w, below, (k0 - (fa < fine ? fa : fine)) << ks);
+    rg.q0[rg.count] = w;
+    rg.q1[rg.count] = c0 + lanes;
+    rg.count++;
+    /* nothing in reach (sparse rows): no neighbouring window, nothing before the block
+     * within one edge in x, and the block's own elements more than one edge apart (keys
+     * more than `fine` apart, the windows' own criterion): no candidate, no kernel call (2D
+     * huge domain, N = 1e6, where a quarter of the rows hold two elements or more: sweep 16
+     * -> 15 ns per element; 3D: 19 -> 17.5) */
+    if (rg.count == 1 && w == c0) {
+      int l = 1;
+      while (l < lanes && ((key[c0 + l] >> ks) & mx) - ((key[c0 + l - 1] >> ks) & mx) > fine) l++;
+      if (l == lanes) continue;
+    }
+    st = nbs__cs_offer(c, s, c0, lanes, &rg);
+  }
+  return st;
+}
+
+/* 3D: sweeps the rows that start in [from, to) of the cell order (from and to on row
+ * boundaries), each by its blocks (nbs__cs_row_blocks), with the four neighbouring rows of
+ * the half mask, (dy, dz) = (-1, -1) (0, -1) (1, -1) (-1, 0) in key order. */
+static inline __attribute__((always_inline)) nbs_status
+nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
+                    nbs__cs_count_fn below, nbs__cs_count_fn upto) {
+  nbs__sink local = *out; /* kept in registers, written back at the end */
+  nbs__sink *s = &local;
+  nbs_status st = NBS_OK;
+  const uint64_t *key = c->key;
+  const int bx = c->bx, by = c->by, ks = c->ks, kx = bx + ks;
+  const uint64_t my = ((uint64_t)1 << by) - 1;
   const int64_t ny = c->ny;
-  /* the rows of the half mask, (dy, dz), in key order: (-1, 0) in 2D; (-1, -1) (0, -1)
-   * (1, -1) (-1, 0) in 3D */
-  const int rows = dim == 3 ? 4 : 1;
-  static const int row_dy[2][4] = {{-1}, {-1, 0, 1, -1}}, row_dz[2][4] = {{0}, {-1, -1, -1, 0}};
+  static const int row_dy[4] = {-1, 0, 1, -1}, row_dz[4] = {-1, -1, -1, 0};
   int32_t cur[4] = {-1, -1, -1, -1};
-  const uint64_t rowlow = ((uint64_t)1 << kx) - 1;
   int32_t a = from, prev_a = -1;
   uint64_t prev_row = 0;
   while (a < to && st == NBS_OK) {
     const uint64_t row = key[a] >> kx;
-    /* the row's end: in 2D sixteen keys at a time, since a loop by key mispredicts its exit
-     * once per row, and there a sparse scene's rows hold one element or two, a coin toss
-     * (2D huge domain, N = 1e6, with the row before taken from the last row swept, below:
-     * 25.7 -> 24.5 ns per element); in 3D a sparse scene's rows hold one element, an exit a
-     * branch predicts, and the loop was faster (huge: 32.7 against 35.1). It stops at `to`
-     * at the latest: `to` starts a row, and the padding (all ones) is above every row's
-     * last key, since a 2D key has at most 63 bits (two axes of at most 2^30 cells, 3 fine
-     * bits). */
+    /* the row's end: a loop by key, since a sparse scene's rows hold one element, an exit
+     * a branch predicts (sixteen keys at a time, as in 2D, was slower: huge domain, N =
+     * 1e6, 35.1 against 32.7 ns per element). It stops at `to` at the latest. */
     int32_t b = a + 1;
-    if (dim == 2) {
-      NBS__CS_ADVANCE(key, b, upto, row << kx | rowlow);
-    } else {
-      while (b < to && key[b] >> kx == row) b++;
-    }
+    while (b < to && key[b] >> kx == row) b++;
     const int64_t iy = (int64_t)(row & my), iz = (int64_t)(row >> by);
     /* the neighbouring rows: their first element (or -1: empty or outside) */
     uint64_t base[4];
     int32_t q0[4], q1[4];
-    for (int r = 0; r < rows; r++) {
+    for (int r = 0; r < 4; r++) {
       q0[r] = -1;
-      const int64_t y = iy + row_dy[dim - 2][r], z = iz + row_dz[dim - 2][r];
+      const int64_t y = iy + row_dy[r], z = iz + row_dz[r];
       if (y < 0 || y >= ny || z < 0) continue;
       const uint64_t trow = (uint64_t)z << by | (uint64_t)y;
       base[r] = trow << bx;
       int32_t q = cur[r];
-      if (row_dz[dim - 2][r] == 0 && prev_a >= 0) {
+      if (row_dz[r] == 0 && prev_a >= 0) {
         /* the row before in the same layer: the last row swept, if it is that row (else
          * the row is empty, and its window starts at a, whose keys are above it) */
         q = prev_row == trow ? prev_a : a;
@@ -960,72 +1026,126 @@ nbs__cs_sweep_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
         NBS__CS_ADVANCE(key, q, below, base[r] << ks);
         cur[r] = q;
       }
-      /* in 2D an empty row just gives empty windows: there, a sparse scene's rows hold one
-       * element or two, and whether the row below is empty is a coin toss that a branch
-       * would mispredict (2D huge domain, N = 1e6: sweep 18 -> 16 ns per element); in 3D
-       * most of a sparse scene's neighbouring rows are empty and the branch is cheaper */
-      if (dim == 2 || key[q] >> kx == trow) q0[r] = q1[r] = q;
+      /* most of a sparse scene's neighbouring rows are empty, and the branch costs less
+       * than the empty windows */
+      if (key[q] >> kx == trow) q0[r] = q1[r] = q;
     }
-    int32_t w = a;
-    for (int32_t c0 = a; c0 < b && st == NBS_OK; c0 += NBS__CS_LANES) {
-      const int lanes = b - c0 < NBS__CS_LANES ? (int)(b - c0) : NBS__CS_LANES;
-      /* The sweep's own rows are its one stream of memory not read before: the gather (or
-       * the start from the last order) wrote them, and at scale they have left the caches
-       * since; the windows of the neighbouring rows read what the own rows read a row or a
-       * layer before. Asked for NBS__CS_SWEEP_AHEAD places ahead, which the processor's
-       * prefetchers, following some twenty streams, did not do as well (3D, N = 1e6, one
-       * thread: sweep 19.8 -> 18.2 ns per element; 1e7: 21.9 -> 18.9; 2D 1e6: 7.2 -> 6.3;
-       * asking for the windows' streams too gained nothing). */
-      const int32_t ahead = c0 + NBS__CS_SWEEP_AHEAD < c->n ? c0 + NBS__CS_SWEEP_AHEAD : c0;
-      __builtin_prefetch(key + ahead);
-      __builtin_prefetch(c->xs + ahead);
-      __builtin_prefetch(c->ys + ahead);
-      if (dim == 3) __builtin_prefetch(c->zs + ahead);
-      if (c->rs) __builtin_prefetch(c->rs + ahead);
-      if (c->istep == 1) __builtin_prefetch(c->ids + ahead); /* unpacked keys */
-      const uint64_t k0 = key[c0] >> ks;
-      const uint64_t fa = k0 & mx, fb = (key[c0 + lanes - 1] >> ks) & mx;
-      nbs__cs_ranges rg;
-      rg.count = 0;
-      /* each neighbouring row: a window of fa - fine .. fb + fine */
-      for (int r = 0; r < rows; r++) {
-        if (q0[r] < 0) continue;
-        const uint64_t lo = base[r] + (fa > fine ? fa - fine : 0);
-        const uint64_t hi = base[r] + (mx - fb > fine ? fb + fine : mx);
-        /* both stop at a at the latest: key[a] > base + mx. Each edge moves from where it
-         * was, so that the two are independent chains of loads (q1 >= q0 all the same:
-         * the first key above hi is not before the first key from lo on); a sparse row's
-         * blocks wait for one edge at a time instead of two (2D huge domain, N = 1e6:
-         * sweep 14.3 -> 13.0 ns per element) */
-        NBS__CS_ADVANCE(key, q0[r], below, lo << ks);
-        NBS__CS_ADVANCE(key, q1[r], upto, hi << ks | low);
-        rg.q0[rg.count] = q0[r];
-        rg.q1[rg.count] = q1[r];
-        rg.count += q1[r] > q0[r];
-      }
-      /* own row: the elements before the block from fa - fine on (none before a row's
-       * first block: no search there, which spares sparse scenes, whose rows hold one
-       * element or two, a load and compare per row: huge domain, N = 1e6, sweep 13.5 ->
-       * 12.6 ns per element in 2D, 16.7 -> 15.7 in 3D), and the block itself */
-      if (c0 > a) NBS__CS_ADVANCE(key, w, below, (k0 - (fa < fine ? fa : fine)) << ks);
-      rg.q0[rg.count] = w;
-      rg.q1[rg.count] = c0 + lanes;
-      rg.count++;
-      /* nothing in reach (sparse rows): no neighbouring window, nothing before the block
-       * within one edge in x, and the block's own elements more than one edge apart (keys
-       * more than `fine` apart, the windows' own criterion): no candidate, no kernel call
-       * (2D huge domain, N = 1e6, where a quarter of the rows hold two elements or more:
-       * sweep 16 -> 15 ns per element; 3D: 19 -> 17.5) */
-      if (rg.count == 1 && w == c0) {
-        int l = 1;
-        while (l < lanes && ((key[c0 + l] >> ks) & mx) - ((key[c0 + l - 1] >> ks) & mx) > fine) l++;
-        if (l == lanes) continue;
-      }
-      st = nbs__cs_offer(c, s, c0, lanes, &rg);
-    }
+    st = nbs__cs_row_blocks(c, s, a, b, 4, base, q0, q1, below, upto);
     prev_row = row;
     prev_a = a;
     a = b;
+  }
+  *out = local;
+  return st;
+}
+
+/* A 2D row of fewer elements than this is swept element by element (nbs__cs_sweep2_body);
+ * at most NBS__CS_PAD + 1, for the padding after the keys. */
+#define NBS__CS_SHORT 4
+
+/* 2D: sweeps the rows that start in [from, to) of the cell order (from and to on row
+ * boundaries), with the one neighbouring row of the half mask, the row below (dy = -1).
+ * A row of NBS__CS_SHORT elements or more is swept by its blocks (nbs__cs_row_blocks). A
+ * shorter one, element by element: element p meets the elements before it in its own row
+ * within one cell edge in x (sub-cells x - fine .. x), and those of the row below within one
+ * edge either side (x - fine .. x + fine). All of them lie in the cell order between the
+ * first key from (row - 1, x - fine) on and p, so three counts of the sixteen keys before p
+ * find both ranges, with no search and no state carried from one element to the next;
+ * further back (more than sixteen keys in reach) a binary search does.
+ * Why: a sparse domain's rows hold an element or two (2D huge domain, 1e12 cells for 1e6
+ * elements: 0.63 rows per element), and a row cost about 13 ns in blocks: finding its end,
+ * the row below and the windows, each waiting on the one before. Element by element, the
+ * counts of an element do not wait on those of the one before. */
+static inline __attribute__((always_inline)) nbs_status
+nbs__cs_sweep2_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
+                    nbs__cs_count_fn below, nbs__cs_count_fn upto) {
+  nbs__sink local = *out; /* kept in registers, written back at the end */
+  nbs__sink *s = &local;
+  nbs_status st = NBS_OK;
+  const uint64_t *key = c->key;
+  const int bx = c->bx, ks = c->ks, kx = bx + ks;
+  const uint64_t low = ((uint64_t)1 << ks) - 1, mx = ((uint64_t)1 << bx) - 1;
+  const uint64_t rowlow = ((uint64_t)1 << kx) - 1;
+  const uint64_t fine = c->fine;
+  /* the last row begun, and its first place (-1: none yet in this range) */
+  uint64_t last_row = 0;
+  int32_t last_a = -1;
+  int32_t p = from;
+  while (p < to && st == NBS_OK) {
+    const uint64_t k = key[p] >> ks, row = k >> bx, x = k & mx;
+    /* a 2D key has at most 63 bits, so the padding (all ones) after the keys is in no
+     * row, and a key past `to` is in a later row */
+    const bool first = p == 0 || key[p - 1] >> kx != row;
+    if (first && key[p + NBS__CS_SHORT - 1] >> kx == row) {
+      /* a long row: by blocks. Its end, sixteen keys at a time (a loop by key
+       * mispredicts its exit once per row). The row below (row = iy in 2D): the last row
+       * begun, if it is that row, else empty, its window starting at p (whose keys are
+       * above it); a range's first row searches. */
+      int32_t b = p + NBS__CS_SHORT;
+      NBS__CS_ADVANCE(key, b, upto, row << kx | rowlow);
+      uint64_t base[1] = {0};
+      int32_t q0[1] = {-1}, q1[1] = {-1};
+      if (row > 0) {
+        base[0] = (row - 1) << bx;
+        const int32_t q = last_a < 0            ? nbs__cs_lower(key, p, base[0] << ks)
+                          : last_row == row - 1 ? last_a
+                                                : p;
+        q0[0] = q1[0] = q;
+      }
+      st = nbs__cs_row_blocks(c, s, p, b, 1, base, q0, q1, below, upto);
+      last_row = row;
+      last_a = p;
+      p = b;
+      continue;
+    }
+    last_row = first ? row : last_row;
+    last_a = first ? p : last_a;
+    if ((p & (NBS__CS_LANES - 1)) == 0 && p + NBS__CS_SWEEP_AHEAD < c->n) {
+      __builtin_prefetch(key + p + NBS__CS_SWEEP_AHEAD);
+      __builtin_prefetch(c->xs + p + NBS__CS_SWEEP_AHEAD);
+      __builtin_prefetch(c->ys + p + NBS__CS_SWEEP_AHEAD);
+      if (c->rs) __builtin_prefetch(c->rs + p + NBS__CS_SWEEP_AHEAD);
+      if (c->istep == 1) __builtin_prefetch(c->ids + p + NBS__CS_SWEEP_AHEAD);
+    }
+    /* bounds on the words: the own row from x - fine on; the row below, x - fine .. x +
+     * fine (a word above `hb` is past it) */
+    const uint64_t xl = x > fine ? x - fine : 0, xh = mx - x > fine ? x + fine : mx;
+    const uint64_t own = (row << bx | xl) << ks;
+    const uint64_t lb = ((row - 1) << bx | xl) << ks, hb = ((row - 1) << bx | xh) << ks | low;
+    /* the places before p: from p - c1 on, keys from lb on; from p - c2, above hb; from
+     * p - c3, in reach in the own row (c1 >= c2 >= c3: lb <= hb < own) */
+    int32_t c1, c2, c3;
+    if (p >= NBS__CS_PAD) {
+      const uint64_t *back = key + p - NBS__CS_PAD;
+      c3 = NBS__CS_PAD - below(back, own);
+      c1 = c2 = c3;
+      if (row > 0) {
+        c1 = NBS__CS_PAD - below(back, lb);
+        c2 = NBS__CS_PAD - upto(back, hb);
+      }
+    } else {
+      c1 = NBS__CS_PAD; /* the search below */
+    }
+    if (c1 == NBS__CS_PAD) {
+      /* as many keys in reach as were counted, or too few keys before p: search */
+      c3 = p - nbs__cs_lower(key, p, own);
+      c1 = c2 = c3;
+      if (row > 0) {
+        c1 = p - nbs__cs_lower(key, p, lb);
+        c2 = p - nbs__cs_lower(key, p, hb + 1); /* hb < 2^63: a 2D key has 63 bits */
+      }
+    }
+    if (c1 > c2 || c3 > 0) {
+      nbs__cs_ranges rg;
+      rg.q0[0] = p - c1;
+      rg.q1[0] = p - c2;
+      rg.count = c1 > c2;
+      rg.q0[rg.count] = p - c3;
+      rg.q1[rg.count] = p + 1;
+      rg.count++;
+      st = nbs__cs_offer(c, s, p, 1, &rg);
+    }
+    p++;
   }
   *out = local;
   return st;
@@ -1036,16 +1156,19 @@ nbs__cs_sweep_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
  * them). */
 static nbs_status nbs__cs_sweep_generic(const nbs__cs *c, nbs__sink *out, int32_t from,
                                         int32_t to) {
-  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below, nbs__cs_upto);
+  return c->dim == 2 ? nbs__cs_sweep2_body(c, out, from, to, nbs__cs_below, nbs__cs_upto)
+                     : nbs__cs_sweep3_body(c, out, from, to, nbs__cs_below, nbs__cs_upto);
 }
 #if NBS__CS_AVX512
 NBS__CS_AVX512_TARGET
 static nbs_status nbs__cs_sweep_avx512(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to) {
-  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below512, nbs__cs_upto512);
+  return c->dim == 2 ? nbs__cs_sweep2_body(c, out, from, to, nbs__cs_below512, nbs__cs_upto512)
+                     : nbs__cs_sweep3_body(c, out, from, to, nbs__cs_below512, nbs__cs_upto512);
 }
 NBS__CS_AVX2_TARGET
 static nbs_status nbs__cs_sweep_avx2(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to) {
-  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below256, nbs__cs_upto256);
+  return c->dim == 2 ? nbs__cs_sweep2_body(c, out, from, to, nbs__cs_below256, nbs__cs_upto256)
+                     : nbs__cs_sweep3_body(c, out, from, to, nbs__cs_below256, nbs__cs_upto256);
 }
 #endif
 

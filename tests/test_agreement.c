@@ -393,6 +393,124 @@ static int64_t core_scene(int dim, int64_t n, double f, double h, double far_x, 
   return n - block - tail;
 }
 
+/* 2D rows of one to three elements, with contacts within rows and between neighbouring rows:
+ * cellsort sweeps such rows element by element, not by blocks (nbs__cs_sweep2_body, rows of
+ * fewer than NBS__CS_SHORT = 4). A chain of `chain` elements 0.4 apart in x and in y (each
+ * touching the one before), jittered; every 97th doubled at the same coordinates (equal
+ * keys); and every 1250 elements a long row across the chain, 150 elements 0.3 apart, so
+ * that rows of blocks and rows of elements meet, and the elements of the row above a long
+ * one have more than sixteen keys in reach (which a binary search then finds). With radii
+ * (radii true), each element's is drawn from [0.15, 0.5]. Shuffled. */
+static void short_rows_scene(int64_t chain, bool radii, uint64_t seed, scene *s) {
+  const int64_t lines = chain / 1250, line = 150, doubles = chain / 97 + 1;
+  memset(s, 0, sizeof *s);
+  s->dim = 2;
+  s->n = chain + doubles + lines * line;
+  s->diameter = 1.0;
+  s->coords = malloc((size_t)s->n * 2 * sizeof *s->coords);
+  if (radii) s->radii = malloc((size_t)s->n * sizeof *s->radii);
+  uint64_t state = seed;
+  int64_t e = 0;
+  for (int64_t k = 0; k < chain; k++, e++) {
+    s->coords[2 * e] = 0.4 * (double)k + 0.1 * (next_unit(&state) - 0.5);
+    s->coords[2 * e + 1] = 0.4 * (double)k + 0.1 * (next_unit(&state) - 0.5);
+    if (k % 97 == 0) {
+      s->coords[2 * (e + 1)] = s->coords[2 * e];
+      s->coords[2 * (e + 1) + 1] = s->coords[2 * e + 1];
+      e++;
+    }
+  }
+  for (int64_t l = 1; l <= lines; l++) {
+    const double at = 0.4 * (double)(l * 1250);
+    for (int64_t k = 0; k < line; k++, e++) {
+      s->coords[2 * e] = at - 30.0 + 0.3 * (double)k;
+      s->coords[2 * e + 1] = at + 0.5 + 0.01 * next_unit(&state);
+    }
+  }
+  if (e != s->n) abort();
+  if (radii) {
+    for (int64_t k = 0; k < s->n; k++) s->radii[k] = 0.15 + 0.35 * next_unit(&state);
+  }
+  for (int64_t k = s->n - 1; k > 0; k--) {
+    const int64_t o = (int64_t)(next_unit(&state) * (double)(k + 1));
+    for (int a = 0; a < 2; a++) {
+      const double t = s->coords[2 * k + a];
+      s->coords[2 * k + a] = s->coords[2 * o + a];
+      s->coords[2 * o + a] = t;
+    }
+    if (radii) {
+      const double t = s->radii[k];
+      s->radii[k] = s->radii[o];
+      s->radii[o] = t;
+    }
+  }
+}
+
+/* Receives a callback's batches into a pair_list. */
+static int collect_pairs(void *user, const nbs_pair *pairs, size_t count) {
+  pair_list *l = user;
+  nbs_pair *p = realloc(l->p, (l->count + count + 1) * sizeof *p);
+  if (!p) abort();
+  memcpy(p + l->count, pairs, count * sizeof *pairs);
+  l->p = p;
+  l->count += count;
+  return 0;
+}
+
+/* cellsort's rows swept element by element (short_rows_scene): the contacts of direct,
+ * candidates a superset of them, the same bytes through a callback, max_pairs kept; with
+ * and without radii; then, large enough for threads, the same bytes for 1 to 4 threads and
+ * the contacts of NBS. */
+static void test_short_rows(void) {
+  for (int radii = 0; radii <= 1; radii++) {
+    scene s;
+    short_rows_scene(3000, radii, 31 + (uint64_t)radii, &s);
+    nbs_context *ctx;
+    ASSERT_OK(nbs_context_create(NULL, &ctx));
+    pair_list ref, got, cand, raw, viacb = {NULL, 0};
+    ASSERT_OK(detect_sorted(ctx, &s, NBS_DIRECT, NBS_MODE_CONTACTS, &ref));
+    CHECK_MSG(ref.count > (size_t)s.n / 2, "radii %d: only %zu contacts", radii, ref.count);
+    ASSERT_OK(detect_sorted(ctx, &s, NBS_CELLSORT, NBS_MODE_CONTACTS, &got));
+    CHECK_MSG(pair_lists_equal(&got, &ref), "radii %d: cellsort finds %zu contacts, direct %zu",
+              radii, got.count, ref.count);
+    ASSERT_OK(detect_sorted(ctx, &s, NBS_CELLSORT, NBS_MODE_CANDIDATES, &cand));
+    CHECK_MSG(well_formed(&cand, s.n) && pair_list_contains(&cand, &ref),
+              "radii %d: the candidates repeat a pair or miss a contact", radii);
+    ASSERT_OK(detect_raw(ctx, &s, NBS_CELLSORT, NBS_MODE_CONTACTS, &raw));
+    nbs_input in = scene_input(&s);
+    nbs_detect_def def = nbs_default_detect_def();
+    def.algorithm = NBS_CELLSORT;
+    def.callback = collect_pairs;
+    def.user = &viacb;
+    ASSERT_OK(nbs_detect(ctx, &in, &def));
+    CHECK_MSG(viacb.count == raw.count &&
+                  memcmp(viacb.p, raw.p, raw.count * sizeof *raw.p) == 0,
+              "radii %d: the callback's %zu pairs differ from the buffer's %zu", radii,
+              viacb.count, raw.count);
+    def = nbs_default_detect_def();
+    def.algorithm = NBS_CELLSORT;
+    for (size_t less = 0; less <= 1; less++) {
+      nbs_context_def cdef = nbs_default_context_def();
+      cdef.max_pairs = raw.count - less;
+      nbs_context *capped;
+      ASSERT_OK(nbs_context_create(&cdef, &capped));
+      CHECK_STATUS(nbs_detect(capped, &in, &def), less ? NBS_ERR_PAIRS : NBS_OK);
+      nbs_context_destroy(capped);
+    }
+    pair_list_free(&ref);
+    pair_list_free(&got);
+    pair_list_free(&cand);
+    pair_list_free(&raw);
+    free(viacb.p);
+    nbs_context_destroy(ctx);
+    scene_free(&s);
+  }
+  scene s;
+  short_rows_scene(60000, false, 33, &s);
+  check_cellsort_threads(&s, 4, "2D short rows", -1);
+  scene_free(&s);
+}
+
 /* More outliers than far elements: the core box's face cuts through the tail. */
 static void test_core(void) {
   scene s;
@@ -416,6 +534,7 @@ int main(int argc, char **argv) {
       {"shared_digit", test_shared_digit},
       {"bucket_scratch", test_bucket_scratch},
       {"core", test_core},
+      {"short_rows", test_short_rows},
   };
   return test_main(argc, argv, tests, sizeof tests / sizeof *tests);
 }
