@@ -222,15 +222,17 @@ class Suite:
             # fastest: a disturbed process would otherwise flatter nbs's ratio to it, and
             # no twin row shows a peer's disturbance
             rounds = a.lammps_rounds if peer.startswith("lammps") else 1
+            measured = 1  # processes that gave a time
             for _ in range(rounds - 1):
                 if len(res) != 1 or res[0].get("status") != "ok":
                     break
-                more, err = self.run_peer(peer, path, dim)
-                if (len(more) == 1 and more[0].get("status") == "ok" and
-                        float(more[0]["seconds"]) < float(res[0]["seconds"])):
-                    res = more
-            if rounds > 1 and len(res) == 1 and res[0].get("status") == "ok":
-                res[0]["note"] = f"fastest of {rounds} processes"
+                more, _ = self.run_peer(peer, path, dim)
+                if len(more) == 1 and more[0].get("status") == "ok":
+                    measured += 1
+                    if float(more[0]["seconds"]) < float(res[0]["seconds"]):
+                        res = more
+            if measured > 1:
+                res[0]["note"] = f"fastest of {measured} processes"
             results += res
         if not a.keep_files:
             os.remove(path)

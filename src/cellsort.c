@@ -984,10 +984,8 @@ nbs__cs_row_blocks(const nbs__cs *c, nbs__sink *s, int32_t a, int32_t b, int row
  * boundaries), each by its blocks (nbs__cs_row_blocks), with the four neighbouring rows of
  * the half mask, (dy, dz) = (-1, -1) (0, -1) (1, -1) (-1, 0) in key order. */
 static inline __attribute__((always_inline)) nbs_status
-nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
+nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
                     nbs__cs_count_fn below, nbs__cs_count_fn upto) {
-  nbs__sink local = *out; /* kept in registers, written back at the end */
-  nbs__sink *s = &local;
   nbs_status st = NBS_OK;
   const uint64_t *key = c->key;
   const int bx = c->bx, by = c->by, ks = c->ks, kx = bx + ks;
@@ -1035,7 +1033,6 @@ nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
     prev_a = a;
     a = b;
   }
-  *out = local;
   return st;
 }
 
@@ -1057,10 +1054,8 @@ nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
  * the row below and the windows, each waiting on the one before. Element by element, the
  * counts of an element do not wait on those of the one before. */
 static inline __attribute__((always_inline)) nbs_status
-nbs__cs_sweep2_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
+nbs__cs_sweep2_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
                     nbs__cs_count_fn below, nbs__cs_count_fn upto) {
-  nbs__sink local = *out; /* kept in registers, written back at the end */
-  nbs__sink *s = &local;
   nbs_status st = NBS_OK;
   const uint64_t *key = c->key;
   const int bx = c->bx, ks = c->ks, kx = bx + ks;
@@ -1147,6 +1142,16 @@ nbs__cs_sweep2_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
     }
     p++;
   }
+  return st;
+}
+
+/* The sweep of the rows that start in [from, to), into `out`: 2D or 3D. */
+static inline __attribute__((always_inline)) nbs_status
+nbs__cs_sweep_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
+                   nbs__cs_count_fn below, nbs__cs_count_fn upto) {
+  nbs__sink local = *out; /* kept in registers, written back at the end */
+  const nbs_status st = c->dim == 2 ? nbs__cs_sweep2_body(c, &local, from, to, below, upto)
+                                    : nbs__cs_sweep3_body(c, &local, from, to, below, upto);
   *out = local;
   return st;
 }
@@ -1156,19 +1161,16 @@ nbs__cs_sweep2_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
  * them). */
 static nbs_status nbs__cs_sweep_generic(const nbs__cs *c, nbs__sink *out, int32_t from,
                                         int32_t to) {
-  return c->dim == 2 ? nbs__cs_sweep2_body(c, out, from, to, nbs__cs_below, nbs__cs_upto)
-                     : nbs__cs_sweep3_body(c, out, from, to, nbs__cs_below, nbs__cs_upto);
+  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below, nbs__cs_upto);
 }
 #if NBS__CS_AVX512
 NBS__CS_AVX512_TARGET
 static nbs_status nbs__cs_sweep_avx512(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to) {
-  return c->dim == 2 ? nbs__cs_sweep2_body(c, out, from, to, nbs__cs_below512, nbs__cs_upto512)
-                     : nbs__cs_sweep3_body(c, out, from, to, nbs__cs_below512, nbs__cs_upto512);
+  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below512, nbs__cs_upto512);
 }
 NBS__CS_AVX2_TARGET
 static nbs_status nbs__cs_sweep_avx2(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to) {
-  return c->dim == 2 ? nbs__cs_sweep2_body(c, out, from, to, nbs__cs_below256, nbs__cs_upto256)
-                     : nbs__cs_sweep3_body(c, out, from, to, nbs__cs_below256, nbs__cs_upto256);
+  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below256, nbs__cs_upto256);
 }
 #endif
 

@@ -446,17 +446,6 @@ static void short_rows_scene(int64_t chain, bool radii, uint64_t seed, scene *s)
   }
 }
 
-/* Receives a callback's batches into a pair_list. */
-static int collect_pairs(void *user, const nbs_pair *pairs, size_t count) {
-  pair_list *l = user;
-  nbs_pair *p = realloc(l->p, (l->count + count + 1) * sizeof *p);
-  if (!p) abort();
-  memcpy(p + l->count, pairs, count * sizeof *pairs);
-  l->p = p;
-  l->count += count;
-  return 0;
-}
-
 /* cellsort's rows swept element by element (short_rows_scene): the contacts of direct,
  * candidates a superset of them, the same bytes through a callback, max_pairs kept; with
  * and without radii; then, large enough for threads, the same bytes for 1 to 4 threads and
@@ -467,7 +456,7 @@ static void test_short_rows(void) {
     short_rows_scene(3000, radii, 31 + (uint64_t)radii, &s);
     nbs_context *ctx;
     ASSERT_OK(nbs_context_create(NULL, &ctx));
-    pair_list ref, got, cand, raw, viacb = {NULL, 0};
+    pair_list ref, got, cand, raw, viacb;
     ASSERT_OK(detect_sorted(ctx, &s, NBS_DIRECT, NBS_MODE_CONTACTS, &ref));
     CHECK_MSG(ref.count > (size_t)s.n / 2, "radii %d: only %zu contacts", radii, ref.count);
     ASSERT_OK(detect_sorted(ctx, &s, NBS_CELLSORT, NBS_MODE_CONTACTS, &got));
@@ -477,17 +466,12 @@ static void test_short_rows(void) {
     CHECK_MSG(well_formed(&cand, s.n) && pair_list_contains(&cand, &ref),
               "radii %d: the candidates repeat a pair or miss a contact", radii);
     ASSERT_OK(detect_raw(ctx, &s, NBS_CELLSORT, NBS_MODE_CONTACTS, &raw));
-    nbs_input in = scene_input(&s);
-    nbs_detect_def def = nbs_default_detect_def();
-    def.algorithm = NBS_CELLSORT;
-    def.callback = collect_pairs;
-    def.user = &viacb;
-    ASSERT_OK(nbs_detect(ctx, &in, &def));
-    CHECK_MSG(viacb.count == raw.count &&
-                  memcmp(viacb.p, raw.p, raw.count * sizeof *raw.p) == 0,
+    ASSERT_OK(detect_callback(ctx, &s, NBS_CELLSORT, NBS_MODE_CONTACTS, &viacb));
+    CHECK_MSG(pair_lists_equal(&viacb, &raw),
               "radii %d: the callback's %zu pairs differ from the buffer's %zu", radii,
               viacb.count, raw.count);
-    def = nbs_default_detect_def();
+    nbs_input in = scene_input(&s);
+    nbs_detect_def def = nbs_default_detect_def();
     def.algorithm = NBS_CELLSORT;
     for (size_t less = 0; less <= 1; less++) {
       nbs_context_def cdef = nbs_default_context_def();
@@ -501,7 +485,7 @@ static void test_short_rows(void) {
     pair_list_free(&got);
     pair_list_free(&cand);
     pair_list_free(&raw);
-    free(viacb.p);
+    pair_list_free(&viacb);
     nbs_context_destroy(ctx);
     scene_free(&s);
   }

@@ -201,44 +201,6 @@ static bool same_bytes(const pair_list *a, const pair_list *b) {
   return pair_lists_equal(a, b);
 }
 
-/* ---- helpers ------------------------------------------------------------------------- */
-
-typedef struct collector {
-  pair_list l;
-  size_t cap;
-} collector;
-
-static int collect(void *user, const nbs_pair *pairs, size_t count) {
-  collector *c = user;
-  if (c->l.count + count > c->cap) {
-    c->cap = 2 * (c->l.count + count);
-    c->l.p = realloc(c->l.p, c->cap * sizeof *c->l.p);
-    if (!c->l.p) abort();
-  }
-  memcpy(c->l.p + c->l.count, pairs, count * sizeof *pairs);
-  c->l.count += count;
-  return 0;
-}
-
-/* The same detection through a callback: the batches concatenated. */
-static nbs_status detect_callback(nbs_context *ctx, const scene *s, nbs_algorithm algo,
-                                  nbs_mode mode, pair_list *out) {
-  collector c = {{NULL, 0}, 0};
-  nbs_input in = scene_input(s);
-  nbs_detect_def def = nbs_default_detect_def();
-  def.algorithm = algo;
-  def.mode = mode;
-  def.callback = collect;
-  def.user = &c;
-  nbs_status st = nbs_detect(ctx, &in, &def);
-  *out = c.l;
-  if (!out->p) {
-    out->p = malloc(sizeof *out->p);
-    if (!out->p) abort();
-  }
-  return st;
-}
-
 /* ---- tests --------------------------------------------------------------------------- */
 
 /* Every algorithm, both modes: the same bytes in the same order from a fresh context, from

@@ -20,6 +20,9 @@ nbs_status detect_raw(nbs_context *ctx, const scene *s, nbs_algorithm algo, nbs_
 /* The same, the pairs sorted. */
 nbs_status detect_sorted(nbs_context *ctx, const scene *s, nbs_algorithm algo, nbs_mode mode,
                          pair_list *out);
+/* The same detection through a callback: its batches concatenated, in order (not sorted). */
+nbs_status detect_callback(nbs_context *ctx, const scene *s, nbs_algorithm algo, nbs_mode mode,
+                           pair_list *out);
 /* Detects the contacts of s with algo (the default definition otherwise) and fills *st
  * with the detection's statistics. Returns the status. */
 nbs_status detect_stats(nbs_context *ctx, const scene *s, nbs_algorithm algo, nbs_stats *st);
