@@ -26,6 +26,7 @@ static const char cli_generate_help[] =
     "  identical   every element at one point\n"
     "  far         uniform, and one element 1e15 diameters away\n"
     "  huge        uniform over a domain of about 1e6 cells per element\n"
+    "  slab        uniform in a layer two diameters thick (a bed; 2D: a strip)\n"
     "\n"
     "Options:\n"
     "  --dim 2|3           dimension (default 3)\n"
@@ -143,7 +144,7 @@ int cli_generate(int argc, char **argv) {
   int kind = scene_kind_from_name(name);
   if (kind < 0) {
     return cli_usage(cmd, "unknown scene '%s': use uniform, lattice, clustered, sparse, wide, "
-                          "faces, identical, far or huge", name);
+                          "faces, identical, far, huge or slab", name);
   }
   def.kind = (scene_kind)kind;
   scene s;

@@ -534,13 +534,15 @@ def summary(rows, n_head):
             target(f"linear: {tool} {dim}D N=1e7 within 1.3x of N=1e4",
                    None if lo is None or hi is None else hi / lo <= 1.3,
                    f"{f(lo)} -> {f(hi)} ns, ratio {f'{hi / lo:.2f}' if lo and hi else 'n/a'}")
-    n_sc = max([int(r["N"]) for r in rows if r["scene"] in ("sparse", "clustered", "huge")
+    n_sc = max([int(r["N"]) for r in rows if r["scene"] in OTHER_SCENES
                 and r["status"] == "ok"] or [0])
+    # slab is not one of the scenes: compared when it was run
+    others = [sc for sc in OTHER_SCENES if sc != "slab" or any(r["scene"] == sc for r in rows)]
     if n_sc:
         for tool in ("nbs-auto", "nbs-nbs"):
             for dim in (3, 2):
                 u = find(rows, tool=tool, dim=dim, scene="uniform", N=n_sc, order="random")
-                for scene in ("sparse", "clustered", "huge"):
+                for scene in others:
                     s = find(rows, tool=tool, dim=dim, scene=scene, N=n_sc, order="random")
                     if not (u and s):
                         target(f"{scene} within 1.5x of uniform: {tool} {dim}D", None, "")
@@ -621,7 +623,9 @@ STYLE = {"nbs-auto": ("C0", "o"), "nbs-auto-2t": ("C0", "1"), "nbs-auto-steps": 
          "nbs-nbs": ("C1", "s"), "nbs-sorting": ("C2", "^"), "nbs-screening": ("C3", "v"),
          "nbs-direct": ("C7", "x"), "nanoflann": ("C4", "D"), "cgal": ("C5", "P"),
          "scipy": ("C6", "*"), "lammps": ("k", "h"), "lammps-nosort": ("C8", "<")}
-SCENE_ORDER = {"uniform": 0, "sparse": 1, "clustered": 2, "huge": 3}
+SCENE_ORDER = {"uniform": 0, "sparse": 1, "clustered": 2, "huge": 3, "slab": 4}
+# the scenes compared with uniform (slab: a layer two diameters thick, 2D a strip)
+OTHER_SCENES = ("sparse", "clustered", "huge", "slab")
 
 
 def tool_rank(tool):
@@ -730,7 +734,8 @@ def plots(rows, out):
     made.append("memory_per_element.png")
 
     # 4. scenes at the largest N that has all of them.
-    scenes = ["uniform", "sparse", "clustered", "huge"]
+    scenes = ["uniform"] + [sc for sc in OTHER_SCENES if sc != "slab"
+                            or any(r["scene"] == sc for r in ok)]
     fig, axes = plt.subplots(1, 2, figsize=(13, 5.2))
     for ax, dim in zip(axes, (3, 2)):
         ns = [int(r["N"]) for r in ok if r["dim"] == str(dim) and r["scene"] == "huge"

@@ -11,6 +11,7 @@
 
 static const char *const scene_names[SCENE_KIND_COUNT] = {
     "uniform", "lattice", "clustered", "sparse", "wide", "faces", "identical", "far", "huge",
+    "slab",
 };
 
 const char *scene_kind_name(scene_kind kind) {
@@ -236,6 +237,19 @@ int scene_generate(const scene_def *def, scene *out, char *err, size_t errlen) {
     /* n elements over n * 1e6 cells of edge d (1e12 cells for n = 1e6). */
     double edge = d * pow((double)(n > 0 ? n : 1) * 1e6, 1.0 / dim);
     scene_fill_uniform(out, 0, n, 0.0, edge, &rng);
+    break;
+  }
+  case SCENE_SLAB: {
+    /* A bed on a floor (3D) or a strip (2D): the last axis two diameters thick, the others
+     * wide enough for `fraction`. */
+    const double thick = 2.0 * d;
+    const double area = (double)(n > 0 ? n : 1) * scene_volume(dim, d) / (def->fraction * thick);
+    const double wide = pow(area, 1.0 / (dim - 1));
+    for (int64_t k = 0; k < n; k++) {
+      for (int a = 0; a < dim; a++) {
+        out->coords[k * dim + a] = (a == dim - 1 ? thick : wide) * scene_uniform(&rng);
+      }
+    }
     break;
   }
   default:

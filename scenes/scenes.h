@@ -24,6 +24,7 @@ typedef enum scene_kind {
   SCENE_IDENTICAL,     /* every element at one point */
   SCENE_FAR,           /* uniform, and one element 1e15 diameters away */
   SCENE_HUGE,          /* uniform over a domain of ~1e12 cells (spread far beyond contact) */
+  SCENE_SLAB,          /* uniform at `fraction` in a layer two diameters thick (2D: a strip) */
   SCENE_KIND_COUNT
 } scene_kind;
 

@@ -265,6 +265,12 @@ nbs_status nbs__nbs(nbs__run *run);
  * (munjiza_nbs.c, "Folded axes"). Fills lists[] (1 past dim) and returns true when an axis
  * is folded. */
 bool nbs__nbs_fold(const nbs__run *run, int64_t lists[3]);
+/* The order in which NBS nests its lists, for lists[] lists per axis: its axis a (0: the
+ * x-lists', 1: the y-lists', 2: the z-lists'; in 2D 1 is the rows') is the coordinate
+ * at[a]. The book's order, except that the outer axis (the layers' in 3D, the rows' in 2D)
+ * is the one with the most lists where it has at least twice as many as z (2D: y): a flat
+ * scene's layers would hold all its elements (munjiza_nbs.c, "The order of the axes"). */
+void nbs__nbs_order(int dim, const int64_t lists[3], int at[3]);
 /* The lists NBS keeps each layer's z-list as, for nz layers and n elements (capacities):
  * a power of two from 1 to 8, as many as keep their heads within n / 64. Element k is on
  * list k mod ways of its layer; the walks of steps 3 and 4 go down them side by side. */

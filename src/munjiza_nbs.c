@@ -129,6 +129,24 @@
  * unfolded lists of a sparse one were about twice as fast. (With 2D's block, below, the
  * crowded 2D scene holds 4.13 MB, and sparse, clustered, huge 4.10, 4.12, 4.10.)
  *
+ * The order of the axes (beyond the book, for memory and time). The book nests its lists
+ * x in y in z (2D: x in y), and the layer block holds the largest layer and the one below
+ * it. On a flat scene, a bed of spheres two diameters deep on a floor, the layers along z
+ * are two, and the block held all N elements: 40 bytes per element where a crowded cube
+ * needs 4.7, and time went up with it (the block far out of cache). So the outer axis (the
+ * layers' in 3D, the rows' in 2D) is the one with the most lists, where it has at least
+ * twice as many as the book's z (2D: y); the other axes keep their order (nbs__nbs_order,
+ * after the fold). A cube, whose axes hold about as many lists each, keeps the book's
+ * order exactly. Only which coordinate each list level reads changes (nbs__nbs_axes.at):
+ * the elements, in the block too, keep the caller's coordinates, so the distance test
+ * rounds as direct's. Measured (N = 1e6, one thread, interleaved, min of 3, ns per element
+ * and work bytes; the scene `slab`, and its coordinates turned for the others): 3D slab
+ * 209 -> 86 ns and 40.0 -> 4.15 MB; a rod 4 diameters thick along x 363 -> 188 ns and 44.2
+ * -> 7.14 MB, as along z before; 2D strip two diameters wide 215 -> 174 ns and 44.4 -> 10.3
+ * MB. A strip stays dearer than a crowded square (57 ns, 4.13 MB): its rows, each a cell
+ * of the long axis, hold an element or two, so its heads are about N / 2 rows of 3 ints,
+ * and walking a row of two waits on memory without another walk beside it.
+ *
  * Measured on the 2-core AMD EPYC of bench/README.md, N = 1e6, fraction 0.5, random order,
  * one thread, before and after the deviations that are about speed, back to back: 3D 548 ->
  * 297 ns per element for the side-by-side walks and the records (side by side: 548 -> 395,
@@ -314,17 +332,23 @@ bool nbs__nbs_heads_empty(const nbs_context *ctx) {
 /* ---- helpers of the detection -------------------------------------------------------- */
 
 /* The cells the lists are indexed by: the grid's, each axis folded or not (see "Folded
- * axes" in the file comment). */
+ * axes" in the file comment), and taken in the order the lists nest (see "The order of the
+ * axes"): NBS's axis a (0: the x-lists', 1: the y-lists', 2: the z-lists'; in 2D 1 is the
+ * rows') is the coordinate at[a], and g is the grid with its axes in NBS's order. The
+ * coordinates themselves, in the block too, stay in the caller's order, so that the
+ * distance test rounds as direct's does. */
 typedef struct nbs__nbs_axes {
   const nbs__grid *g;
   int32_t mask[3]; /* a folded axis of m lists: m - 1 (cell c is on list c mod m); else -1 */
+  int32_t at[3];   /* the coordinate of each of NBS's axes */
   bool fold;       /* an axis is folded (a constant in each compiled copy of the steps) */
 } nbs__nbs_axes;
 
-/* Padded list index of the point p on `axis`: 1 + Int((x - xmin) / d) (eq. 3.26, whose book
- * form is 1-based as well), the cell coordinate folded first on a folded axis. */
+/* Padded list index of the point p (dim coordinates, in the caller's order) on NBS's
+ * `axis`: 1 + Int((x - xmin) / d) (eq. 3.26, whose book form is 1-based as well; nbs__cell's
+ * formula), the cell coordinate folded first on a folded axis. */
 static inline int32_t nbs__nbs_at(const nbs__nbs_axes *g, const double *p, int axis) {
-  const int32_t c = nbs__cell(g->g, p, axis);
+  const int32_t c = (int32_t)((p[g->at[axis]] - g->g->lo[axis]) * g->g->inv_edge);
   return 1 + (g->fold ? c & g->mask[axis] : c);
 }
 
@@ -1045,6 +1069,22 @@ bool nbs__nbs_fold(const nbs__run *run, int64_t lists[3]) {
   return folded;
 }
 
+void nbs__nbs_order(int dim, const int64_t lists[3], int at[3]) {
+  at[0] = 0;
+  at[1] = 1;
+  at[2] = 2;
+  /* the outer axis (3D: the layers'; 2D: the rows'): the one with the most lists (the
+   * later of equals), where it has at least twice as many as the book's z (2D: y) */
+  int top = dim - 1;
+  for (int a = dim - 2; a >= 0; a--) top = lists[a] > lists[top] ? a : top;
+  if (lists[top] < 2 * lists[dim - 1]) top = dim - 1;
+  /* the others keep their order */
+  for (int a = 0, j = 0; a < dim; a++) {
+    if (a != top) at[j++] = a;
+  }
+  at[dim - 1] = top;
+}
+
 nbs_status nbs__nbs(nbs__run *run) {
   nbs_context *ctx = run->ctx;
   const nbs__grid *g = &run->grid;
@@ -1068,13 +1108,24 @@ nbs_status nbs__nbs(nbs__run *run) {
   /* The lists per axis (folded or not), and what this detection needs: {nx, ny, nz (0 in
    * 2D), N} lists. */
   int64_t lists[3];
-  nbs__nbs_axes axes = {g, {-1, -1, -1}, false};
-  axes.fold = run->compressed = nbs__nbs_fold(run, lists);
+  const bool fold = run->compressed = nbs__nbs_fold(run, lists);
+  for (int a = 0; a < dim; a++) run->cells[a] = lists[a];
+  /* NBS's axes in their order (the grid's, permuted), and the lists of each */
+  int at[3];
+  nbs__nbs_order(dim, lists, at);
+  nbs__grid grid = *g;
+  nbs__nbs_axes axes = {&grid, {-1, -1, -1}, {0, 1, 2}, fold};
+  int64_t nl[3] = {1, 1, 1};
   for (int a = 0; a < dim; a++) {
-    if (lists[a] < g->n[a]) axes.mask[a] = (int32_t)(lists[a] - 1);
-    run->cells[a] = lists[a];
+    const int c = at[a];
+    grid.lo[a] = g->lo[c];
+    grid.hi[a] = g->hi[c];
+    grid.n[a] = g->n[c];
+    axes.at[a] = c;
+    nl[a] = lists[c];
+    if (lists[c] < g->n[c]) axes.mask[a] = (int32_t)(lists[c] - 1);
   }
-  const int64_t need[4] = {lists[0], lists[1], dim == 3 ? lists[2] : 0, run->n};
+  const int64_t need[4] = {nl[0], nl[1], dim == 3 ? nl[2] : 0, run->n};
   const uint64_t need_heads = nbs__nbs_axis_bytes(dim, need);
   if (need_heads > ctx->cell_budget) {
     return nbs__fail(ctx, NBS_ERR_BUDGET, -1,

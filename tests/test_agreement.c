@@ -15,28 +15,33 @@ typedef struct case_def {
   double fraction;
   double offset;
   double diameter;
+  int turn; /* the axes turned: coordinate a is the scene's (a - turn) mod dim */
 } case_def;
 
 static const case_def cases[] = {
-    {"uniform dense", SCENE_UNIFORM, 1500, 0.6, 0.0, 1.0},
-    {"uniform medium", SCENE_UNIFORM, 1500, 0.3, 0.0, 1.0},
-    {"uniform loose", SCENE_UNIFORM, 1500, 0.05, 0.0, 1.0},
-    {"sparse", SCENE_SPARSE, 1500, 0.005, 0.0, 1.0},
-    {"clustered", SCENE_CLUSTERED, 1500, 0.5, 0.0, 1.0},
-    {"lattice at touching", SCENE_LATTICE, 1000, 0.5, 0.0, 1.0},
-    {"lattice, diameter 0.1", SCENE_LATTICE, 1000, 0.5, 0.0, 0.1},
-    {"on cell faces", SCENE_FACES, 1000, 0.5, 0.0, 1.0},
-    {"negative coordinates", SCENE_UNIFORM, 1000, 0.4, -1234.5, 1.0},
-    {"offset 1e9", SCENE_UNIFORM, 1000, 0.4, 1e9, 1.0},
-    {"all identical", SCENE_IDENTICAL, 150, 0.5, 3.25, 1.0},
-    {"one far away", SCENE_FAR, 1000, 0.4, 0.0, 1.0},
-    {"per-element radii", SCENE_WIDE, 1500, 0.4, 0.0, 1.0},
-    {"huge domain", SCENE_HUGE, 1500, 0.5, 0.0, 1.0},
-    {"tiny diameter", SCENE_UNIFORM, 800, 0.3, 0.0, 1e-200},
-    {"n = 0", SCENE_UNIFORM, 0, 0.5, 0.0, 1.0},
-    {"n = 1", SCENE_UNIFORM, 1, 0.5, 0.0, 1.0},
-    {"n = 2 touching", SCENE_LATTICE, 2, 0.5, 0.0, 1.0},
-    {"n = 2 apart", SCENE_IDENTICAL, 2, 0.5, 0.0, 1.0},
+    {"uniform dense", SCENE_UNIFORM, 1500, 0.6, 0.0, 1.0, 0},
+    {"uniform medium", SCENE_UNIFORM, 1500, 0.3, 0.0, 1.0, 0},
+    {"uniform loose", SCENE_UNIFORM, 1500, 0.05, 0.0, 1.0, 0},
+    {"sparse", SCENE_SPARSE, 1500, 0.005, 0.0, 1.0, 0},
+    {"clustered", SCENE_CLUSTERED, 1500, 0.5, 0.0, 1.0, 0},
+    {"lattice at touching", SCENE_LATTICE, 1000, 0.5, 0.0, 1.0, 0},
+    {"lattice, diameter 0.1", SCENE_LATTICE, 1000, 0.5, 0.0, 0.1, 0},
+    {"on cell faces", SCENE_FACES, 1000, 0.5, 0.0, 1.0, 0},
+    {"negative coordinates", SCENE_UNIFORM, 1000, 0.4, -1234.5, 1.0, 0},
+    {"offset 1e9", SCENE_UNIFORM, 1000, 0.4, 1e9, 1.0, 0},
+    {"all identical", SCENE_IDENTICAL, 150, 0.5, 3.25, 1.0, 0},
+    {"one far away", SCENE_FAR, 1000, 0.4, 0.0, 1.0, 0},
+    {"per-element radii", SCENE_WIDE, 1500, 0.4, 0.0, 1.0, 0},
+    {"huge domain", SCENE_HUGE, 1500, 0.5, 0.0, 1.0, 0},
+    /* thin in z (2D: y), then in x, then (3D) in y: NBS and cellsort choose their axes */
+    {"slab", SCENE_SLAB, 1500, 0.5, 0.0, 1.0, 0},
+    {"slab thin in x", SCENE_SLAB, 1500, 0.5, 0.0, 1.0, 1},
+    {"slab thin in y", SCENE_SLAB, 1500, 0.5, 0.0, 1.0, 2},
+    {"tiny diameter", SCENE_UNIFORM, 800, 0.3, 0.0, 1e-200, 0},
+    {"n = 0", SCENE_UNIFORM, 0, 0.5, 0.0, 1.0, 0},
+    {"n = 1", SCENE_UNIFORM, 1, 0.5, 0.0, 1.0, 0},
+    {"n = 2 touching", SCENE_LATTICE, 2, 0.5, 0.0, 1.0, 0},
+    {"n = 2 apart", SCENE_IDENTICAL, 2, 0.5, 0.0, 1.0, 0},
 };
 
 static const nbs_algorithm algorithms[] = {NBS_AUTO, NBS_SCREENING, NBS_SORTING, NBS_NBS,
@@ -71,6 +76,11 @@ static void run_case(const case_def *c, int dim, nbs_context *ctx) {
   char err[200];
   ASSERT_MSG(scene_generate(&def, &s, err, sizeof err) == 0, "%s", err);
   if (c->kind == SCENE_IDENTICAL && c->n == 2) s.coords[dim] = 5.0; /* apart */
+  for (int64_t k = 0; k < s.n; k++) {
+    double *p = s.coords + k * dim, q[3];
+    for (int a = 0; a < dim; a++) q[a] = p[(a - c->turn % dim + dim) % dim];
+    for (int a = 0; a < dim; a++) p[a] = q[a];
+  }
 
   pair_list ref, ref_cand;
   ASSERT_OK(detect_sorted(ctx, &s, NBS_DIRECT, NBS_MODE_CONTACTS, &ref));
