@@ -458,11 +458,23 @@ static nbs_status fz_expected(const fz_run *R, nbs_algorithm algo) {
      * (ny+2 or nz+2) and the records of started lists (2 (nx+1), those of the elements'
      * lists, ny+1 or nz+1, and 2 (ny+1) in 3D), all int32, with nx, ny, nz the lists per
      * axis */
-    const int64_t nl = l[s->dim - 1];
+    /* in NBS's order of the axes: the outer one (layers; 2D rows) is, of the others, the one
+     * with the most lists (the later of equals) where it has at least twice as many as the
+     * last axis; the rest keep their order */
+    const int d = s->dim;
+    int best = 0;
+    for (int a = 1; a < d - 1; a++) best = l[a] >= l[best] ? a : best;
+    const int top = l[best] >= 2 * l[d - 1] ? best : d - 1;
+    int64_t m[3] = {1, 1, 1};
+    for (int a = 0, j = 0; a < d; a++) {
+      if (a != top) m[j++] = l[a];
+    }
+    m[d - 1] = l[top];
+    const int64_t nl = m[d - 1];
     const int64_t w = nbs__nbs_zways(nl, s->n);
-    int64_t heads = 2 * (l[0] + 2) + (s->dim == 3 ? 2 * (l[1] + 2) : 0) + w * (nl + 2);
+    int64_t heads = 2 * (m[0] + 2) + (d == 3 ? 2 * (m[1] + 2) : 0) + w * (nl + 2);
     int64_t counts = nl + 2;
-    int64_t records = 2 * (l[0] + 1) + nl + 1 + (s->dim == 3 ? 2 * (l[1] + 1) : 0);
+    int64_t records = 2 * (m[0] + 1) + nl + 1 + (d == 3 ? 2 * (m[1] + 1) : 0);
     return (uint64_t)(heads + counts + records) * 4u > s->cell_budget ? NBS_ERR_BUDGET
                                                                      : NBS_OK;
   }

@@ -181,6 +181,19 @@ def detect_seeds():
                     s.body += op(0, 16 + rng.randrange(4))
             seeds[f"budget_{dim}d_{budget}"] = s
 
+        # a flat scene (3D: a layer two cells deep; 2D: a strip) under budgets around its
+        # heads: NBS lays its layers (rows) along a wide axis, whose heads the budget counts
+        # (their own generator, so that the seeds after them stay as they were)
+        frng = random.Random(20261124 + dim)
+        for budget in (800, 900, 1000, 1050, 1100, 1200):
+            s = Seed(dim=dim, n=64, budget=BUDGET_U16, budget_value=budget, unit="d")
+            for k in range(64):
+                s.body += op(0, frng.randrange(32))
+                if dim == 3:
+                    s.body += op(0, frng.randrange(32))
+                s.body += op(0, 16 + frng.randrange(2))
+            seeds[f"budget_flat_{dim}d_{budget}"] = s
+
         # raw doubles, some of them NaN or infinite (the input is then invalid)
         s = Seed(dim=dim, n=8, reserve=20)
         for k in range(8):
