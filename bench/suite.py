@@ -536,8 +536,7 @@ def summary(rows, n_head):
                    f"{f(lo)} -> {f(hi)} ns, ratio {f'{hi / lo:.2f}' if lo and hi else 'n/a'}")
     n_sc = max([int(r["N"]) for r in rows if r["scene"] in OTHER_SCENES
                 and r["status"] == "ok"] or [0])
-    # slab is not one of the issue's scenes: compared when it was run
-    others = [sc for sc in OTHER_SCENES if sc != "slab" or any(r["scene"] == sc for r in rows)]
+    others = compared_scenes(rows)
     if n_sc:
         for tool in ("nbs-auto", "nbs-nbs"):
             for dim in (3, 2):
@@ -626,6 +625,11 @@ STYLE = {"nbs-auto": ("C0", "o"), "nbs-auto-2t": ("C0", "1"), "nbs-auto-steps": 
 SCENE_ORDER = {"uniform": 0, "sparse": 1, "clustered": 2, "huge": 3, "slab": 4}
 # the scenes compared with uniform (slab: a layer two diameters thick, 2D a strip)
 OTHER_SCENES = ("sparse", "clustered", "huge", "slab")
+
+
+def compared_scenes(rows):
+    """The scenes compared with uniform: the issue's always, slab (not one of them) when run."""
+    return [sc for sc in OTHER_SCENES if sc != "slab" or any(r["scene"] == sc for r in rows)]
 
 
 def tool_rank(tool):
@@ -734,8 +738,7 @@ def plots(rows, out):
     made.append("memory_per_element.png")
 
     # 4. scenes at the largest N that has all of them.
-    scenes = ["uniform"] + [sc for sc in OTHER_SCENES if sc != "slab"
-                            or any(r["scene"] == sc for r in ok)]
+    scenes = ["uniform"] + compared_scenes(ok)
     fig, axes = plt.subplots(1, 2, figsize=(13, 5.2))
     for ax, dim in zip(axes, (3, 2)):
         ns = [int(r["N"]) for r in ok if r["dim"] == str(dim) and r["scene"] == "huge"

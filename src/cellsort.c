@@ -49,7 +49,7 @@
  *      plain C any other; all three give the same bytes in the same order (3D, N = 1e6, on
  *      the benchmark machine: 28, 36 and 71 ns per element in all).
  *      The rows lie along the axis with the most cells, where it has at least twice as many
- *      as x (nbs__cs_axes; the key's x, y and z are then the caller's coordinates in another
+ *      as x (nbs__axis_order; the key's x, y and z are then the caller's coordinates in another
  *      order, and the coordinates themselves are kept as they are): a wall thin in x, or a
  *      column along z, would otherwise make rows of an element or two (3D, N = 1e6, the
  *      scene `slab`, two diameters thick, turned to be thin in x: 58.6 -> 27.9 ns per
@@ -1199,22 +1199,22 @@ static int32_t nbs__cs_row_start(const nbs__cs *c, int32_t p) {
 #endif
 
 /* How a cell key is made from an element's coordinates: (iz, iy, x sub-cell), iz highest,
- * where the key's x, y and z are the coordinates c[0], c[1], c[2] (see nbs__cs_axes: the
+ * where the key's x, y and z are the coordinates c[0], c[1], c[2] (see nbs__cellsort: the
  * rows lie along the axis with the most cells). x counts sub-cells: (x - lo) * (fine /
  * edge), the same roundings as nbs__cell's (the scaling by a power of two is exact), so the
  * argument of input.c holds with windows of `fine` sub-cells: |dx| <= edge(1 - margin)
  * stays within them. */
 typedef struct nbs__cs_keying {
-  double lo_x, lo_y, lo_z, inv_fine, inv_edge;
+  const nbs__grid *g; /* its axes in the key's order */
+  double lo_x, inv_fine;
   int c[3];        /* the coordinate of the key's x, y and z */
   int dim, sy, sz; /* where iy and iz start in the key */
 } nbs__cs_keying;
 
 static inline uint64_t nbs__cs_cellkey(const nbs__cs_keying *kg, const double *xk) {
   const uint64_t ix = (uint64_t)((xk[kg->c[0]] - kg->lo_x) * kg->inv_fine);
-  const uint64_t iy = (uint64_t)(int32_t)((xk[kg->c[1]] - kg->lo_y) * kg->inv_edge);
-  const uint64_t iz =
-      kg->dim == 3 ? (uint64_t)(int32_t)((xk[kg->c[2]] - kg->lo_z) * kg->inv_edge) : 0;
+  const uint64_t iy = (uint64_t)nbs__cell_of(kg->g, xk[kg->c[1]], 1);
+  const uint64_t iz = kg->dim == 3 ? (uint64_t)nbs__cell_of(kg->g, xk[kg->c[2]], 2) : 0;
   return iz << kg->sz | iy << kg->sy | ix;
 }
 
@@ -1430,7 +1430,9 @@ nbs__cs_core_split(const nbs__cs_keying *kg, const double *restrict x, int dim, 
                    int32_t to, const uint64_t lo[3], const int cw[3], int eb,
                    uint64_t *restrict A, uint64_t *restrict key, int32_t *restrict idx,
                    int32_t *n_core, int32_t *n_out) {
+  const nbs__grid g = *kg->g;
   nbs__cs_keying k1 = *kg;
+  k1.g = &g;
   k1.dim = dim;
   const int sy = k1.sy, sz = k1.sz, c0 = cw[0], c1 = cw[1];
   const uint64_t mx = ((uint64_t)1 << sy) - 1, my = ((uint64_t)1 << (sz - sy)) - 1;
@@ -1745,36 +1747,19 @@ static void nbs__cs_append(nbs_pair *dst, const nbs__sink *sinks, int threads, s
   }
 }
 
-/* The key's axes (see nbs__cs_keying): c[0], the rows' axis, is the one with the most
- * cells (the later of equals) where it has at least twice as many as x; the others keep
- * their order. A scene thin in x (a wall, a column) would otherwise make rows of an element
- * or two, and the sweep's time goes to finding rows and windows, not to testing pairs. */
-static void nbs__cs_axes(const nbs__grid *g, int c[3]) {
-  const int dim = g->dim;
-  int row = 0;
-  for (int a = 1; a < dim; a++) row = g->n[a] >= g->n[row] ? a : row;
-  if (g->n[row] < 2 * g->n[0]) row = 0;
-  c[0] = row;
-  for (int a = 0, j = 1; a < 3; a++) {
-    if (a != row) c[j++] = a;
-  }
-}
-
 nbs_status nbs__cellsort(nbs__run *run) {
   nbs_context *ctx = run->ctx;
   const int dim = run->dim;
   const int32_t n = run->n;
   run->ran = NBS_CELLSORT;
   run->compressed = false;
-  /* the grid with its axes in the key's order */
+  /* the grid with its axes in the key's order: the rows (the key's x) along the axis with
+   * the most cells, where it has at least twice as many as x (nbs__axis_order). A scene thin
+   * in x (a wall, a column) would otherwise make rows of an element or two, and the sweep's
+   * time would go to finding rows and windows, not to testing pairs. */
   int kc[3];
-  nbs__cs_axes(&run->grid, kc);
-  nbs__grid anchored = run->grid;
-  for (int a = 0; a < dim; a++) {
-    anchored.lo[a] = run->grid.lo[kc[a]];
-    anchored.hi[a] = run->grid.hi[kc[a]];
-    anchored.n[a] = run->grid.n[kc[a]];
-  }
+  nbs__axis_order(dim, run->grid.n, 0, kc);
+  nbs__grid anchored = nbs__grid_reorder(&run->grid, kc);
   const nbs__grid *g = &anchored;
   if (!g->fits) {
     return nbs__fail(ctx, NBS_ERR_EXTENT, -1,
@@ -1853,11 +1838,9 @@ nbs_status nbs__cellsort(nbs__run *run) {
   run->work_bytes = bytes;
 
   nbs__cs_keying kg;
+  kg.g = g;
   kg.lo_x = g->lo[0];
-  kg.lo_y = g->lo[1];
-  kg.lo_z = dim == 3 ? g->lo[2] : 0.0;
   kg.inv_fine = g->inv_edge * (double)((uint64_t)1 << fine_bits);
-  kg.inv_edge = g->inv_edge;
   for (int a = 0; a < 3; a++) kg.c[a] = kc[a];
   kg.dim = dim;
   kg.sy = bx;

@@ -285,3 +285,26 @@ nbs_status nbs__prepare(nbs__run *run, const nbs_input *in) {
   }
   return NBS_OK;
 }
+
+void nbs__axis_order(int dim, const int64_t count[3], int slot, int at[3]) {
+  int best = slot;
+  for (int a = 0; a < dim; a++) {
+    if (a != slot && (best == slot || count[a] >= count[best])) best = a;
+  }
+  if (best == slot || count[best] < 2 * count[slot]) best = slot;
+  for (int a = 0, j = 0; a < 3; a++) {
+    if (j == slot) j++; /* the slot's place is best's */
+    if (a != best) at[j++] = a;
+  }
+  at[slot] = best;
+}
+
+nbs__grid nbs__grid_reorder(const nbs__grid *g, const int at[3]) {
+  nbs__grid r = *g;
+  for (int a = 0; a < g->dim; a++) {
+    r.lo[a] = g->lo[at[a]];
+    r.hi[a] = g->hi[at[a]];
+    r.n[a] = g->n[at[a]];
+  }
+  return r;
+}

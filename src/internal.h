@@ -66,8 +66,13 @@ typedef struct nbs__grid {
   double rmax;         /* largest radius */
 } nbs__grid;
 
+/* The cell of coordinate v on `axis` of g; nbs__cell, that of the point x. */
+static inline int32_t nbs__cell_of(const nbs__grid *g, double v, int axis) {
+  return (int32_t)((v - g->lo[axis]) * g->inv_edge);
+}
+
 static inline int32_t nbs__cell(const nbs__grid *g, const double *x, int axis) {
-  return (int32_t)((x[axis] - g->lo[axis]) * g->inv_edge);
+  return nbs__cell_of(g, x[axis], axis);
 }
 
 #define NBS__THREADS_MAX 64
@@ -193,6 +198,15 @@ nbs_status nbs__fail(nbs_context *ctx, nbs_status status, int64_t element, const
 /* ---- input (input.c) ---- */
 /* Validates `in` and fills run->grid. Names the first offending element. */
 nbs_status nbs__prepare(nbs__run *run, const nbs_input *in);
+/* An order of the axes for an algorithm whose structure nests them (NBS's lists, cellsort's
+ * key), with count[a] cells or lists on coordinate axis a: its axis i is coordinate at[i].
+ * Coordinate i at each place i, except at `slot`, where the axis that nests worst when
+ * short goes (NBS's layers: slot dim - 1; cellsort's rows: slot 0): of the other axes, the
+ * one with the most (the later of equals), where it has at least twice as many as axis
+ * `slot`; the others then keep their order. A cube keeps every axis in its place. */
+void nbs__axis_order(int dim, const int64_t count[3], int slot, int at[3]);
+/* g with its axes in the order at[] (axis a of the result is axis at[a] of g). */
+nbs__grid nbs__grid_reorder(const nbs__grid *g, const int at[3]);
 
 /* ---- pair sink (context.c) ---- */
 /* Called when the batch is full: delivers it to the callback, or grows the buffer. */
@@ -265,12 +279,6 @@ nbs_status nbs__nbs(nbs__run *run);
  * (munjiza_nbs.c, "Folded axes"). Fills lists[] (1 past dim) and returns true when an axis
  * is folded. */
 bool nbs__nbs_fold(const nbs__run *run, int64_t lists[3]);
-/* The order in which NBS nests its lists, for lists[] lists per axis: its axis a (0: the
- * x-lists', 1: the y-lists', 2: the z-lists'; in 2D 1 is the rows') is the coordinate
- * at[a]. The book's order, except that the outer axis (the layers' in 3D, the rows' in 2D)
- * is the one with the most lists where it has at least twice as many as z (2D: y): a flat
- * scene's layers would hold all its elements (munjiza_nbs.c, "The order of the axes"). */
-void nbs__nbs_order(int dim, const int64_t lists[3], int at[3]);
 /* The lists NBS keeps each layer's z-list as, for nz layers and n elements (capacities):
  * a power of two from 1 to 8, as many as keep their heads within n / 64. Element k is on
  * list k mod ways of its layer; the walks of steps 3 and 4 go down them side by side. */

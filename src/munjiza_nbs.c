@@ -135,7 +135,7 @@
  * are two, and the block held all N elements: 40 bytes per element where a crowded cube
  * needs 4.7, and time went up with it (the block far out of cache). So the outer axis (the
  * layers' in 3D, the rows' in 2D) is the one with the most lists, where it has at least
- * twice as many as the book's z (2D: y); the other axes keep their order (nbs__nbs_order,
+ * twice as many as the book's z (2D: y); the other axes keep their order (nbs__axis_order,
  * after the fold). A cube, whose axes hold about as many lists each, keeps the book's
  * order exactly. Only which coordinate each list level reads changes (nbs__nbs_axes.at):
  * the elements, in the block too, keep the caller's coordinates, so the distance test
@@ -345,10 +345,10 @@ typedef struct nbs__nbs_axes {
 } nbs__nbs_axes;
 
 /* Padded list index of the point p (dim coordinates, in the caller's order) on NBS's
- * `axis`: 1 + Int((x - xmin) / d) (eq. 3.26, whose book form is 1-based as well; nbs__cell's
- * formula), the cell coordinate folded first on a folded axis. */
+ * `axis`: 1 + Int((x - xmin) / d) (eq. 3.26, whose book form is 1-based as well), the cell
+ * coordinate folded first on a folded axis. */
 static inline int32_t nbs__nbs_at(const nbs__nbs_axes *g, const double *p, int axis) {
-  const int32_t c = (int32_t)((p[g->at[axis]] - g->g->lo[axis]) * g->g->inv_edge);
+  const int32_t c = nbs__cell_of(g->g, p[g->at[axis]], axis);
   return 1 + (g->fold ? c & g->mask[axis] : c);
 }
 
@@ -1069,22 +1069,6 @@ bool nbs__nbs_fold(const nbs__run *run, int64_t lists[3]) {
   return folded;
 }
 
-void nbs__nbs_order(int dim, const int64_t lists[3], int at[3]) {
-  at[0] = 0;
-  at[1] = 1;
-  at[2] = 2;
-  /* the outer axis (3D: the layers'; 2D: the rows'): the one with the most lists (the
-   * later of equals), where it has at least twice as many as the book's z (2D: y) */
-  int top = dim - 1;
-  for (int a = dim - 2; a >= 0; a--) top = lists[a] > lists[top] ? a : top;
-  if (lists[top] < 2 * lists[dim - 1]) top = dim - 1;
-  /* the others keep their order */
-  for (int a = 0, j = 0; a < dim; a++) {
-    if (a != top) at[j++] = a;
-  }
-  at[dim - 1] = top;
-}
-
 nbs_status nbs__nbs(nbs__run *run) {
   nbs_context *ctx = run->ctx;
   const nbs__grid *g = &run->grid;
@@ -1112,15 +1096,12 @@ nbs_status nbs__nbs(nbs__run *run) {
   for (int a = 0; a < dim; a++) run->cells[a] = lists[a];
   /* NBS's axes in their order (the grid's, permuted), and the lists of each */
   int at[3];
-  nbs__nbs_order(dim, lists, at);
-  nbs__grid grid = *g;
+  nbs__axis_order(dim, lists, dim - 1, at);
+  const nbs__grid grid = nbs__grid_reorder(g, at);
   nbs__nbs_axes axes = {&grid, {-1, -1, -1}, {0, 1, 2}, fold};
   int64_t nl[3] = {1, 1, 1};
   for (int a = 0; a < dim; a++) {
     const int c = at[a];
-    grid.lo[a] = g->lo[c];
-    grid.hi[a] = g->hi[c];
-    grid.n[a] = g->n[c];
     axes.at[a] = c;
     nl[a] = lists[c];
     if (lists[c] < g->n[c]) axes.mask[a] = (int32_t)(lists[c] - 1);
