@@ -86,8 +86,9 @@
  * linear in N for any domain whose cell count fits 64 bits, plus O(candidates).
  *
  * With OpenMP the key pass, the radix sort, the gather and the sweep run in parallel; the
- * sweep's threads take contiguous ranges of rows and their pairs are concatenated in range
- * order, so the output is identical for any number of threads. Two threads halve the key
+ * sweep's threads take contiguous ranges of the cell order, cut at rows' starts or at blocks
+ * of a row (nbs__cs_thread_start), and their pairs are concatenated in range order, so the
+ * output is identical for any number of threads. Two threads halve the key
  * pass, the gather and the sweep; the radix sort's passes by digit did not scale at all
  * (each reads and writes every key, the machine's memory the limit), so where the keys are
  * many it sorts by the top digit first and then each bucket in cache (nbs__radix). 3D,
@@ -904,7 +905,9 @@ static int32_t nbs__cs_lower(const uint64_t *key, int32_t hi, uint64_t k) {
   return lo;
 }
 
-/* The blocks of the row [a, b) of the cell order. Each row is cut into blocks of
+/* The blocks of the row [a, b) of the cell order, a row that starts at row_a <= a (a is
+ * row_a, or a block of the row where a thread's range starts; see nbs__cs_thread_start).
+ * Each row is cut into blocks of
  * NBS__CS_LANES consecutive elements. A block meets itself, the elements before it in its
  * own row within one cell edge in x of its first element, and a window of each of the
  * `rows` neighbouring rows of the half mask: the elements within one cell edge in x either
@@ -914,9 +917,9 @@ static int32_t nbs__cs_lower(const uint64_t *key, int32_t hi, uint64_t k) {
  * window only moves forwards, so finding them costs O(1) per block and row; the kernel then
  * tests one window element against the whole block at once. */
 static inline __attribute__((always_inline)) nbs_status
-nbs__cs_row_blocks(const nbs__cs *c, nbs__sink *s, int32_t a, int32_t b, int rows,
-                   const uint64_t *base, int32_t *q0, int32_t *q1, nbs__cs_count_fn below,
-                   nbs__cs_count_fn upto) {
+nbs__cs_row_blocks(const nbs__cs *c, nbs__sink *s, int32_t row_a, int32_t a, int32_t b,
+                   int rows, const uint64_t *base, int32_t *q0, int32_t *q1,
+                   nbs__cs_count_fn below, nbs__cs_count_fn upto) {
   const int dim = c->dim;
   /* key[q] >> ks is element q's key; a bound b on keys is b << ks on the words (below), or
    * b << ks | low (up to) */
@@ -925,7 +928,7 @@ nbs__cs_row_blocks(const nbs__cs *c, nbs__sink *s, int32_t a, int32_t b, int row
   const uint64_t low = ((uint64_t)1 << ks) - 1, mx = ((uint64_t)1 << c->bx) - 1;
   const uint64_t fine = c->fine;
   nbs_status st = NBS_OK;
-  int32_t w = a;
+  int32_t w = row_a;
   for (int32_t c0 = a; c0 < b && st == NBS_OK; c0 += NBS__CS_LANES) {
     const int lanes = b - c0 < NBS__CS_LANES ? (int)(b - c0) : NBS__CS_LANES;
     /* The sweep's own rows are its one stream of memory not read before: the gather (or
@@ -968,7 +971,7 @@ nbs__cs_row_blocks(const nbs__cs *c, nbs__sink *s, int32_t a, int32_t b, int row
      * block: no search there, which spares sparse scenes, whose rows hold one element or
      * two, a load and compare per row: huge domain, N = 1e6, sweep 13.5 -> 12.6 ns per
      * element in 2D, 16.7 -> 15.7 in 3D), and the block itself */
-    if (c0 > a) NBS__CS_ADVANCE(key, w, below, (k0 - (fa < fine ? fa : fine)) << ks);
+    if (c0 > row_a) NBS__CS_ADVANCE(key, w, below, (k0 - (fa < fine ? fa : fine)) << ks);
     rg.q0[rg.count] = w;
     rg.q1[rg.count] = c0 + lanes;
     rg.count++;
@@ -987,9 +990,10 @@ nbs__cs_row_blocks(const nbs__cs *c, nbs__sink *s, int32_t a, int32_t b, int row
   return st;
 }
 
-/* 3D: sweeps the rows that start in [from, to) of the cell order (from and to on row
- * boundaries), each by its blocks (nbs__cs_row_blocks), with the four neighbouring rows of
- * the half mask, (dy, dz) = (-1, -1) (0, -1) (1, -1) (-1, 0) in key order. */
+/* 3D: sweeps the places [from, to) of the cell order (from and to at rows' starts or at
+ * blocks of a row: nbs__cs_thread_start), each row by its blocks (nbs__cs_row_blocks), with
+ * the four neighbouring rows of the half mask, (dy, dz) = (-1, -1) (0, -1) (1, -1) (-1, 0)
+ * in key order. */
 static inline __attribute__((always_inline)) nbs_status
 nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
                     nbs__cs_count_fn below, nbs__cs_count_fn upto) {
@@ -1004,6 +1008,10 @@ nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
   uint64_t prev_row = 0;
   while (a < to && st == NBS_OK) {
     const uint64_t row = key[a] >> kx;
+    /* the row's start: a, unless a thread's range starts inside the row */
+    const int32_t a0 = a == from && a > 0 && key[a - 1] >> kx == row
+                           ? nbs__cs_lower(key, a, row << kx)
+                           : a;
     /* the row's end: a loop by key, since a sparse scene's rows hold one element, an exit
      * a branch predicts (sixteen keys at a time, as in 2D, was slower: huge domain, N =
      * 1e6, 35.1 against 32.7 ns per element). It stops at `to` at the latest. */
@@ -1035,9 +1043,9 @@ nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
        * than the empty windows */
       if (key[q] >> kx == trow) q0[r] = q1[r] = q;
     }
-    st = nbs__cs_row_blocks(c, s, a, b, 4, base, q0, q1, below, upto);
+    st = nbs__cs_row_blocks(c, s, a0, a, b, 4, base, q0, q1, below, upto);
     prev_row = row;
-    prev_a = a;
+    prev_a = a0;
     a = b;
   }
   return st;
@@ -1047,8 +1055,9 @@ nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
  * at most NBS__CS_PAD + 1, for the padding after the keys. */
 #define NBS__CS_SHORT 4
 
-/* 2D: sweeps the rows that start in [from, to) of the cell order (from and to on row
- * boundaries), with the one neighbouring row of the half mask, the row below (dy = -1).
+/* 2D: sweeps the places [from, to) of the cell order (from and to at rows' starts or at
+ * blocks of a long row: nbs__cs_thread_start), with the one neighbouring row of the half
+ * mask, the row below (dy = -1).
  * A row of NBS__CS_SHORT elements or more is swept by its blocks (nbs__cs_row_blocks). A
  * shorter one, element by element: element p meets the elements before it in its own row
  * within one cell edge in x (sub-cells x - fine .. x), and those of the row below within one
@@ -1078,13 +1087,18 @@ nbs__cs_sweep2_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
     /* a 2D key has at most 63 bits, so the padding (all ones) after the keys is in no
      * row, and a key past `to` is in a later row */
     const bool first = p == 0 || key[p - 1] >> kx != row;
-    if (first && key[p + NBS__CS_SHORT - 1] >> kx == row) {
+    /* a thread's range that starts inside a row starts at one of its blocks, so the row is
+     * a long one */
+    const bool inside = p == from && !first;
+    if ((first && key[p + NBS__CS_SHORT - 1] >> kx == row) || inside) {
       /* a long row: by blocks. Its end, sixteen keys at a time (a loop by key
        * mispredicts its exit once per row). The row below (row = iy in 2D): the last row
        * begun, if it is that row, else empty, its window starting at p (whose keys are
        * above it); a range's first row searches. */
-      int32_t b = p + NBS__CS_SHORT;
+      const int32_t a0 = inside ? nbs__cs_lower(key, p, row << kx) : p;
+      int32_t b = inside ? p + 1 : p + NBS__CS_SHORT;
       NBS__CS_ADVANCE(key, b, upto, row << kx | rowlow);
+      if (b > to) b = to; /* a thread's range that ends inside the row */
       uint64_t base[1] = {0};
       int32_t q0[1] = {-1}, q1[1] = {-1};
       if (row > 0) {
@@ -1094,9 +1108,9 @@ nbs__cs_sweep2_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
                                                 : p;
         q0[0] = q1[0] = q;
       }
-      st = nbs__cs_row_blocks(c, s, p, b, 1, base, q0, q1, below, upto);
+      st = nbs__cs_row_blocks(c, s, a0, p, b, 1, base, q0, q1, below, upto);
       last_row = row;
-      last_a = p;
+      last_a = a0;
       p = b;
       continue;
     }
@@ -1152,7 +1166,7 @@ nbs__cs_sweep2_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
   return st;
 }
 
-/* The sweep of the rows that start in [from, to), into `out`: 2D or 3D. */
+/* The sweep of the places [from, to) of the cell order, into `out`: 2D or 3D. */
 static inline __attribute__((always_inline)) nbs_status
 nbs__cs_sweep_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
                    nbs__cs_count_fn below, nbs__cs_count_fn upto) {
@@ -1190,11 +1204,19 @@ static nbs_status nbs__cs_sweep(const nbs__cs *c, nbs__sink *out, int32_t from, 
 }
 
 #if defined(_OPENMP)
-/* The first position at or after p where a row starts (n at the end). */
-static int32_t nbs__cs_row_start(const nbs__cs *c, int32_t p) {
+/* Where the part of the sweep that would start at place p starts: at p's row's start, or,
+ * in a row longer than a block, at the last of the row's blocks that starts at or before p
+ * (blocks of NBS__CS_LANES places from the row's start). The blocks are those of one
+ * thread, and so are the pairs, in their order: a thread that starts inside a row finds the
+ * row's start, its own window and the neighbouring rows' by search (a 2D row it starts
+ * inside is long: nbs__cs_sweep2_body sweeps it by blocks). Parts cut at rows' starts only
+ * left a scene of few, long rows to one thread: a 2D strip two diameters wide has three or
+ * four rows along its length (N = 1e6, two threads against one: 1.15x). */
+static int32_t nbs__cs_thread_start(const nbs__cs *c, int32_t p) {
+  if (p <= 0 || p >= c->n) return p;
   const int kx = c->bx + c->ks;
-  while (p > 0 && p < c->n && c->key[p] >> kx == c->key[p - 1] >> kx) p++;
-  return p;
+  const int32_t a = nbs__cs_lower(c->key, p, c->key[p] >> kx << kx);
+  return a + (p - a) / NBS__CS_LANES * NBS__CS_LANES;
 }
 #endif
 
@@ -1891,8 +1913,8 @@ nbs_status nbs__cellsort(nbs__run *run) {
 #pragma omp parallel num_threads(threads)
     {
       int t = omp_get_thread_num();
-      int32_t from = nbs__cs_row_start(&c, nbs__chunk(n, t, threads));
-      int32_t to = nbs__cs_row_start(&c, nbs__chunk(n, t + 1, threads));
+      int32_t from = nbs__cs_thread_start(&c, nbs__chunk(n, t, threads));
+      int32_t to = nbs__cs_thread_start(&c, nbs__chunk(n, t + 1, threads));
       sinks[t].status = nbs__cs_sweep(&c, &sinks[t], from, to);
     }
 #endif

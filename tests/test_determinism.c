@@ -57,6 +57,8 @@ typedef enum det_kind {
   DET_RADII,     /* uniform, radii uniform in [0.05, 0.5] (ratio 10) */
   DET_CLUSTERS,  /* two dense boxes far apart, plus a few outliers at 1e12 */
   DET_NEAR_TIES, /* pairs at a distance of D up to rounding: (a, sqrt(1 - a^2)) apart */
+  DET_STRIP,     /* DET_QUANTIZED along x in [0, box), the other axes in [0, 2): a strip
+                  * (3D: a rod), whose few rows run its whole length */
 } det_kind;
 
 static scene det_scene(det_kind kind, int dim, int64_t n, double box, double offset,
@@ -99,6 +101,9 @@ static scene det_scene(det_kind kind, int dim, int64_t n, double box, double off
       switch (kind) {
       case DET_QUANTIZED:
         v = (double)(det_next(&rng) % (uint64_t)(box * 8.0)) * 0.125;
+        break;
+      case DET_STRIP:
+        v = (double)(det_next(&rng) % (uint64_t)(a == 0 ? box * 8.0 : 16.0)) * 0.125;
         break;
       case DET_CLUSTERS:
         v = det_uniform(&rng) * box + (k % 2 ? 1000.0 : 0.0);
@@ -256,13 +261,18 @@ static void test_repeat_runs(void) {
 }
 
 /* Threads: cellsort and auto give the same bytes, in the same order, for every thread
- * count (and with a callback or max_pairs, which keep them on one thread). The scene is
- * large enough (60000 elements) for cellsort to use threads. Without OpenMP the thread
+ * count (and with a callback or max_pairs, which keep them on one thread). The scenes are
+ * large enough (60000 elements) for cellsort to use threads: a square (cube) and a strip
+ * (rod), whose threads start and end inside its few long rows. Without OpenMP the thread
  * count is ignored and the comparison still holds. */
 static void test_thread_counts(void) {
   const int counts[] = {1, 2, 3, 4, 7, 8};
-  for (int dim = 2; dim <= 3; dim++) {
-    scene s = det_scene(DET_QUANTIZED, dim, 60000, dim == 2 ? 300.0 : 45.0, 0.0, 21);
+  for (int shape = 0; shape < 4; shape++) {
+    const int dim = 2 + shape % 2;
+    const bool strip = shape >= 2;
+    scene s = strip ? det_scene(DET_STRIP, dim, 60000, dim == 2 ? 40000.0 : 15000.0, 0.0, 22)
+                    : det_scene(DET_QUANTIZED, dim, 60000, dim == 2 ? 300.0 : 45.0, 0.0, 21);
+    const char *what = strip ? "strip" : "square";
     const nbs_algorithm algos[] = {NBS_CELLSORT, NBS_AUTO};
     for (size_t a = 0; a < 2; a++) {
       for (int mode = 0; mode < 2; mode++) {
@@ -277,17 +287,18 @@ static void test_thread_counts(void) {
           ASSERT_OK(detect_raw(ctx, &s, algos[a], (nbs_mode)mode, &again));
           ASSERT_OK(detect_callback(ctx, &s, algos[a], (nbs_mode)mode, &viacb));
           if (t == 0) {
-            CHECK_MSG(got.count > (size_t)s.n / 2, "%dD: only %zu pairs", dim, got.count);
+            CHECK_MSG(got.count > (size_t)s.n / 2, "%dD %s: only %zu pairs", dim, what,
+                      got.count);
             ref = got;
             got.p = NULL;
           } else {
-            CHECK_MSG(same_bytes(&got, &ref), "%dD %s mode %d: %d threads differ from 1",
-                      dim, nbs_algorithm_name(algos[a]), mode, counts[t]);
+            CHECK_MSG(same_bytes(&got, &ref), "%dD %s %s mode %d: %d threads differ from 1",
+                      dim, what, nbs_algorithm_name(algos[a]), mode, counts[t]);
           }
-          CHECK_MSG(same_bytes(&again, &ref), "%dD %s mode %d, %d threads: a repeat differs",
-                    dim, nbs_algorithm_name(algos[a]), mode, counts[t]);
-          CHECK_MSG(same_bytes(&viacb, &ref), "%dD %s mode %d, %d threads: the callback "
-                    "differs", dim, nbs_algorithm_name(algos[a]), mode, counts[t]);
+          CHECK_MSG(same_bytes(&again, &ref), "%dD %s %s mode %d, %d threads: a repeat differs",
+                    dim, what, nbs_algorithm_name(algos[a]), mode, counts[t]);
+          CHECK_MSG(same_bytes(&viacb, &ref), "%dD %s %s mode %d, %d threads: the callback "
+                    "differs", dim, what, nbs_algorithm_name(algos[a]), mode, counts[t]);
           free(got.p);
           pair_list_free(&again);
           pair_list_free(&viacb);
