@@ -88,9 +88,9 @@
  * With OpenMP the key pass, the radix sort, the gather and the sweep run in parallel; the
  * sweep's threads take contiguous ranges of the cell order, cut at rows' starts or at blocks
  * of a row (nbs__cs_thread_start), and their pairs are concatenated in range order, so the
- * output is identical for any number of threads. Two threads halve the key
- * pass, the gather and the sweep; the radix sort's passes by digit did not scale at all
- * (each reads and writes every key, the machine's memory the limit), so where the keys are
+ * output is identical for any number of threads. Two threads halve the key pass, the
+ * gather and the sweep; the radix sort's passes by digit did not scale at all (each reads
+ * and writes every key, the machine's memory the limit), so where the keys are
  * many it sorts by the top digit first and then each bucket in cache (nbs__radix). 3D,
  * N = 1e6, one thread and two, ns per element: key pass 1.43 and 0.71, sort 4.4-5.3 and 5.9
  * (3.3 with the top digit first), gather 5.4-6.6 and 2.7-3.4, sweep 18.1-18.4 and 9.1-9.4,
@@ -1211,7 +1211,12 @@ static nbs_status nbs__cs_sweep(const nbs__cs *c, nbs__sink *out, int32_t from, 
  * row's start, its own window and the neighbouring rows' by search (a 2D row it starts
  * inside is long: nbs__cs_sweep2_body sweeps it by blocks). Parts cut at rows' starts only
  * left a scene of few, long rows to one thread: a 2D strip two diameters wide has three or
- * four rows along its length (N = 1e6, two threads against one: 1.15x). */
+ * four rows along its length (N = 1e6, the scene `slab`, interleaved, min of 5: one thread
+ * 14.5 ns per element, two 12.97 -> 10.79, 1.12x -> 1.34x; a uniform square and cube the
+ * same, 9.41 and 9.59, 18.10 and 18.14). Tried and left out: the key pass, the gather and
+ * the buckets' sorts taken by the threads a part at a time rather than a fixed half each
+ * (schedule(dynamic); perf showed one core slower than the other at times): the same or
+ * slower (square 9.81, cube 18.08, strip 10.73). */
 static int32_t nbs__cs_thread_start(const nbs__cs *c, int32_t p) {
   if (p <= 0 || p >= c->n) return p;
   const int kx = c->bx + c->ks;
