@@ -907,15 +907,14 @@ static int32_t nbs__cs_lower(const uint64_t *key, int32_t hi, uint64_t k) {
 
 /* The blocks of the row [a, b) of the cell order, a row that starts at row_a <= a (a is
  * row_a, or a block of the row where a thread's range starts; see nbs__cs_thread_start).
- * Each row is cut into blocks of
- * NBS__CS_LANES consecutive elements. A block meets itself, the elements before it in its
- * own row within one cell edge in x of its first element, and a window of each of the
- * `rows` neighbouring rows of the half mask: the elements within one cell edge in x either
- * side of the block. Neighbouring row r's keys start at base[r]; its window starts at
- * q0[r] = q1[r] (q0[r] < 0: no such row). On the x axis the key counts sub-cells of
- * edge / fine (8 unless the key needs the bits), so these windows hug the block. Every
- * window only moves forwards, so finding them costs O(1) per block and row; the kernel then
- * tests one window element against the whole block at once. */
+ * Each row is cut into blocks of NBS__CS_LANES consecutive elements. A block meets itself,
+ * the elements before it in its own row within one cell edge in x of its first element,
+ * and a window of each of the `rows` neighbouring rows of the half mask: the elements
+ * within one cell edge in x either side of the block. Neighbouring row r's keys start at
+ * base[r]; its window starts at q0[r] = q1[r] (q0[r] < 0: no such row). On the x axis the
+ * key counts sub-cells of edge / fine (8 unless the key needs the bits), so these windows
+ * hug the block. Every window only moves forwards, so finding them costs O(1) per block
+ * and row; the kernel then tests one window element against the whole block at once. */
 static inline __attribute__((always_inline)) nbs_status
 nbs__cs_row_blocks(const nbs__cs *c, nbs__sink *s, int32_t row_a, int32_t a, int32_t b,
                    int rows, const uint64_t *base, int32_t *q0, int32_t *q1,
@@ -1085,7 +1084,8 @@ nbs__cs_sweep2_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
   while (p < to && st == NBS_OK) {
     const uint64_t k = key[p] >> ks, row = k >> bx, x = k & mx;
     /* a 2D key has at most 63 bits, so the padding (all ones) after the keys is in no
-     * row, and a key past `to` is in a later row */
+     * row, and a key past `to` is in a later row, or in a long row that a thread's range
+     * ends inside (its blocks are cut at `to` below) */
     const bool first = p == 0 || key[p - 1] >> kx != row;
     /* a thread's range that starts inside a row starts at one of its blocks, so the row is
      * a long one */
