@@ -20,12 +20,14 @@
  *      a few elements far out widen the keys), the core is sorted so and the others apart,
  *      and the two merged (nbs__cs_core);
  *   3. gather the coordinates (and radii) in cell order, prefetching both ends of the
- *      element 128 places ahead: the last random access. Tried and left out: carrying the
- *      coordinates through the sort instead (the top digit's pass computing the keys again
- *      from the input, in order, and moving word, element and coordinates to the bucket,
- *      each bucket then put in order in cache): its scatter into 5 streams per bucket cost
- *      more than the gather and the key pass it replaced (3D, one thread, interleaved, min
- *      of 4: N = 1e6 32.1 -> 35.1 ns per element, 1e7 45.6 -> 53.3);
+ *      element 128 places ahead: the last random access. Where the input is larger than
+ *      the last-level cache (32 MiB), steps 1-3 are instead one partition by the top digit
+ *      that carries the coordinates along in whole lines, then each bucket put in order in
+ *      cache (nbs__cs_partition: N = 1e7, 3D 40.9 -> 39.2 ns per element, 2D 25.1 -> 22.6).
+ *      Tried and left out: the same partition with a plain store of each entry to each of
+ *      the 5 arrays (word, element and coordinates) of its bucket: it cost more than the
+ *      gather and the key pass it replaced (3D, one thread, interleaved, min of 4: N = 1e6
+ *      32.1 -> 35.1 ns per element, 1e7 45.6 -> 53.3);
  *   4. sweep the rows in key order, in blocks of 8 consecutive elements of a row. A block
  *      meets a few ranges of the cell order: itself and the elements before it in its own
  *      row within one edge in x, and a window of each neighbouring row of the half mask
@@ -764,6 +766,21 @@ int nbs__cellsort_simd(void) {
   if (avx2) return NBS__SIMD_AVX2;
 #endif
   return NBS__SIMD_GENERIC;
+}
+
+/* The input's size (bytes of coordinates and radii) above which cellsort sorts by the
+ * partition (nbs__cs_partition) instead of gathering: 32 MiB, about the last-level cache of
+ * a server processor (below it the gather's random reads find the input there; the
+ * partition lost at N = 5e5 in 3D, 12 MB, and was even at 1e6, 24 MB: see
+ * nbs__cs_partition). A constant, not the machine's cache size, so that the path, and so
+ * the time, does not depend on what the C library reports (glibc's sysconf gave 320 MiB of
+ * L3 on the benchmark machine, which has 32). The environment variable NBS_PARTITION, read
+ * when a context is created, says "always" or "never" instead, for tests and comparisons. */
+size_t nbs__cellsort_partition_min(void) {
+  const char *e = getenv("NBS_PARTITION");
+  if (e && strcmp(e, "always") == 0) return 0;
+  if (e && strcmp(e, "never") == 0) return SIZE_MAX;
+  return (size_t)32 << 20;
 }
 
 /* Offers the block [c0, c0 + lanes) against its ranges into the sink: in one call of the
@@ -1637,10 +1654,270 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
   return true;
 }
 
+/* ---- the partition: the sort and the gather at once, where the input is large ---------- */
+
+/* Entries of 8 bytes in a cache line. */
+#define NBS__CS_LINE 8
+
+/* The 64 bytes at src to dst (both on a 64-byte boundary), past the caches where the
+ * processor can (a streaming store: the line is written whole, not read first). */
+static inline void nbs__cs_stream(void *dst, const void *src) {
+#if NBS__CS_AVX512
+  __m128i *d = (__m128i *)dst;
+  const __m128i *s = (const __m128i *)src;
+  _mm_stream_si128(d, _mm_load_si128(s));
+  _mm_stream_si128(d + 1, _mm_load_si128(s + 1));
+  _mm_stream_si128(d + 2, _mm_load_si128(s + 2));
+  _mm_stream_si128(d + 3, _mm_load_si128(s + 3));
+#else
+  memcpy(dst, src, 64);
+#endif
+}
+
+/* The arrays a partition writes: the words and each coordinate array (and the radii), in
+ * their order in a bucket's line buffer. */
+typedef struct nbs__cs_dst {
+  uint64_t *key;
+  double *a[4];
+  int S; /* coordinate arrays: dim, + 1 with radii */
+} nbs__cs_dst;
+
+/* Places [from, to) of the line buffers wl (words) and cl (coordinates) to their places in
+ * the arrays, one by one: a line not wholly the thread's own. */
+static inline __attribute__((always_inline)) void
+nbs__cs_put(const nbs__cs_dst *d, const uint64_t *wl, const double *cl, uint32_t from,
+            uint32_t to) {
+  for (uint32_t q = from; q < to; q++) {
+    d->key[q] = wl[q % NBS__CS_LINE];
+    for (int s = 0; s < d->S; s++) d->a[s][q] = cl[s * NBS__CS_LINE + q % NBS__CS_LINE];
+  }
+}
+
+/* The counts of the keys' top digit (at kshift, dmask) of the elements [f, to), into h. */
+static inline __attribute__((always_inline)) void
+nbs__cs_part_count(const nbs__cs_keying *kg, const double *restrict x, int dim, int32_t f,
+                   int32_t to, int kshift, uint64_t dmask, uint32_t *restrict h) {
+  const nbs__grid g = *kg->g;
+  nbs__cs_keying k1 = *kg;
+  k1.g = &g;
+  k1.dim = dim;
+  memset(h, 0, (size_t)(dmask + 1) * sizeof *h);
+  for (int32_t k = f; k < to; k++) {
+    h[(nbs__cs_cellkey(&k1, x + (size_t)k * (size_t)dim) >> kshift) & dmask]++;
+  }
+}
+
+/* The elements [f, to) to their buckets: element k's word (key << eb | k), coordinates (and
+ * radius) to place h[b]++ of the arrays, b its key's top digit. Each bucket gathers a line
+ * of each array in the buffers wb and cb (a line of 8 entries per bucket and array) and
+ * writes it whole when it is full; start[b] is the bucket's first place of this thread, and
+ * a line that holds places of another (its first, and its last) is written entry by entry.
+ * dim and radii are constants where this is inlined. */
+static inline __attribute__((always_inline)) void
+nbs__cs_part_scatter(const nbs__cs_keying *kg, const double *restrict x,
+                     const double *restrict r, int dim, bool radii, int32_t f, int32_t to,
+                     int eb, int kshift, uint64_t dmask, uint32_t *restrict h,
+                     const uint32_t *restrict start, uint64_t *restrict wb,
+                     const nbs__cs_dst *d) {
+  const nbs__grid g = *kg->g;
+  nbs__cs_keying k1 = *kg;
+  k1.g = &g;
+  k1.dim = dim;
+  const int S = dim + (radii ? 1 : 0);
+  uint64_t *const key = d->key;
+  double *const a0 = d->a[0], *const a1 = d->a[1], *const a2 = d->a[2], *const a3 = d->a[3];
+  for (int32_t k = f; k < to; k++) {
+    const double *xk = x + (size_t)k * (size_t)dim;
+    const uint64_t kk = nbs__cs_cellkey(&k1, xk);
+    const size_t b = (size_t)((kk >> kshift) & dmask);
+    const uint32_t pos = h[b]++;
+    const uint32_t s = pos % NBS__CS_LINE;
+    uint64_t *wl = wb + b * (size_t)(S + 1) * NBS__CS_LINE;
+    double *cl = (double *)(void *)(wl + NBS__CS_LINE);
+    wl[s] = kk << eb | (uint64_t)k;
+    cl[s] = xk[0];
+    cl[NBS__CS_LINE + s] = xk[1];
+    if (dim == 3) cl[2 * NBS__CS_LINE + s] = xk[2];
+    if (radii) cl[dim * NBS__CS_LINE + s] = r[k];
+    if (s == NBS__CS_LINE - 1) {
+      const uint32_t l0 = pos - (NBS__CS_LINE - 1);
+      if (l0 >= start[b]) {
+        nbs__cs_stream(key + l0, wl);
+        nbs__cs_stream(a0 + l0, cl);
+        nbs__cs_stream(a1 + l0, cl + NBS__CS_LINE);
+        if (dim == 3) nbs__cs_stream(a2 + l0, cl + 2 * NBS__CS_LINE);
+        if (radii) nbs__cs_stream((dim == 3 ? a3 : a2) + l0, cl + dim * NBS__CS_LINE);
+      } else {
+        nbs__cs_put(d, wl, cl, start[b], pos + 1);
+      }
+    }
+  }
+  /* each bucket's last line, as far as it is filled */
+  for (size_t b = 0; b <= dmask; b++) {
+    uint32_t l0 = h[b] - h[b] % NBS__CS_LINE;
+    if (l0 < start[b]) l0 = start[b];
+    uint64_t *wl = wb + b * (size_t)(S + 1) * NBS__CS_LINE;
+    nbs__cs_put(d, wl, (double *)(void *)(wl + NBS__CS_LINE), l0, h[b]);
+  }
+#if NBS__CS_AVX512
+  _mm_sfence(); /* the streaming stores, before another thread reads them */
+#endif
+}
+
+/* Bucket [s0, s0 + len) of the partition, whose words and coordinates lie in element order,
+ * put in cell order in the cache: each word's element bits give way to its place in the
+ * bucket (the element to gid[]), the words are sorted by the digits below the top one
+ * (nbs__radix_local, with `other` for scratch), the elements go back into the words and each
+ * one's new place to rank[], and each coordinate array is permuted after them through
+ * `other`: read in order (it comes from memory), each entry written to its rank (in the
+ * cache); reading it at random instead took a fifth longer (3D, N = 1e7, perf). */
+static void nbs__cs_part_bucket(const nbs__cs_dst *d, uint32_t s0, int32_t len, int eb,
+                                nbs__digits dg, uint32_t *h, uint64_t *other, int32_t *gid,
+                                int32_t *rank) {
+  const uint64_t em = ((uint64_t)1 << eb) - 1;
+  uint64_t *w = d->key + s0;
+  for (int32_t q = 0; q < len; q++) {
+    gid[q] = (int32_t)(w[q] & em);
+    w[q] = (w[q] & ~em) | (uint64_t)q;
+  }
+  nbs__radix_local(w, w, other, len, eb, dg, h);
+  for (int32_t p = 0; p < len; p++) {
+    const int32_t q = (int32_t)(w[p] & em);
+    rank[q] = p;
+    w[p] = (w[p] & ~em) | (uint64_t)gid[q];
+  }
+  double *t = (double *)(void *)other;
+  for (int s = 0; s < d->S; s++) {
+    double *a = d->a[s] + s0;
+    for (int32_t q = 0; q < len; q++) t[rank[q]] = a[q];
+    memcpy(a, t, (size_t)len * sizeof *t);
+  }
+}
+
+/* Steps 1-3 at once, for packed keys, where the input is larger than the last-level cache
+ * (nbs__cellsort_partition_min): the keys' top digit counted (a pass over the input, in
+ * order, computing each key), each element's word and coordinates (and radius) moved to its
+ * top digit's bucket (a second such pass, nbs__cs_part_scatter), and each bucket put in
+ * order in the cache (nbs__cs_part_bucket). The result is that of the sort and the gather,
+ * byte for byte: the partition is stable (each thread takes a contiguous part of the input
+ * and writes after the threads before it in each bucket), and so is the bucket's sort.
+ * Why. The gather reads each element's coordinates at random from the caller's array; where
+ * that array is far larger than the caches every read waits on memory, and the gather grew
+ * from 2.6 ns per element at N = 1e4 to 15 at 1e7 (3D, perf), the largest part of the
+ * detection's growth with N. The partition reads the input in order instead, and writes
+ * whole lines: the plain scatter into 4 or 5 arrays per bucket had lost to the gather (see
+ * the file comment), since each element's write to each array fetched its line from memory
+ * first; here each bucket gathers a line of each array in a buffer and writes it whole with
+ * a streaming store, which does not read it. Measured (N = 1e7, random order, one thread,
+ * interleaved, min of 4 processes, ns per element, NBS_PARTITION=never against the
+ * default): 3D 40.9 -> 39.2, 2D 25.1 -> 22.6; perf, 3D: count 2.0, scatter 8.7, buckets 8.2
+ * (their sort 2.8), against keys 2.3, top digit's pass 2.5, buckets' sort 3.0, gather 15.1.
+ * The buckets' pass waits on memory too (it reads back what the scatter wrote past the
+ * caches), and it is why the gain is not larger. Below the threshold it loses: N = 5e5 in
+ * 3D (12 MB) 33.7 -> 36.7, 2D 3e5 16.2 -> 21.7; at 1e6, about even (3D 39.2 -> 38.0, 2D
+ * 22.7 -> 22.0, two threads 19.3 -> 19.7 and 11.2 -> 11.3, min of 3).
+ * spare (spare_bytes of it): the idx array, unused by packed keys: each thread's line
+ * buffers (a line per bucket and array: 160 kB for 512 buckets in 3D with radii), then its
+ * scratch for a bucket (16 bytes per element of the largest). Returns false, having written
+ * nothing the caller needs, where the keys need one digit, are fewer than the square of the
+ * buckets, or have a bucket larger than NBS__RADIX_LOCAL_MAX (a sheet whose elements share
+ * the top digit), or where the buffers or the scratch do not fit spare; the caller then
+ * sorts and gathers. */
+static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__cs_keying *kg,
+                              int eb, nbs__digits dg, uint32_t *hist, int threads, char *spare,
+                              size_t spare_bytes) {
+  const int32_t n = c->n;
+  const int dim = c->dim;
+  const bool radii = c->rs != NULL;
+  const size_t B = dg.buckets;
+  nbs__cs_dst d;
+  d.key = c->key;
+  d.a[0] = c->xs;
+  d.a[1] = c->ys;
+  d.a[2] = dim == 3 ? c->zs : c->rs;
+  d.a[3] = dim == 3 ? c->rs : NULL;
+  d.S = dim + (radii ? 1 : 0);
+  const size_t wc = B * (size_t)(1 + d.S) * NBS__CS_LINE * sizeof(uint64_t);
+  if (dg.passes < 2 || (uint64_t)n < (uint64_t)B * B || (size_t)threads * wc > spare_bytes) {
+    return false;
+  }
+  const int kshift = (dg.passes - 1) * dg.width;
+  const uint64_t dmask = B - 1;
+  const double *x = run->x;
+#if defined(_OPENMP)
+#pragma omp parallel num_threads(threads) if (threads > 1)
+#endif
+  {
+    const int t = nbs__thread_num();
+    const int32_t f = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
+    uint32_t *h = hist + (size_t)t * B;
+    if (dim == 3) {
+      nbs__cs_part_count(kg, x, 3, f, to, kshift, dmask, h);
+    } else {
+      nbs__cs_part_count(kg, x, 2, f, to, kshift, dmask, h);
+    }
+  }
+  uint32_t top[((size_t)1 << NBS__RADIX_BITS) + 1];
+  uint32_t sum = 0, most = 0;
+  for (size_t b = 0; b < B; b++) {
+    top[b] = sum;
+    for (int t = 0; t < threads; t++) {
+      const uint32_t cnt = hist[(size_t)t * B + b];
+      hist[(size_t)t * B + b] = sum;
+      sum += cnt;
+    }
+    if (sum - top[b] > most) most = sum - top[b];
+  }
+  top[B] = sum;
+  /* each thread's scratch for a bucket: the words' sort and the coordinates' permutation
+   * (8 bytes per entry), the elements (4), on a line's boundary */
+  const size_t per = ((size_t)most * 16 + 63) & ~(size_t)63;
+  if (most > NBS__RADIX_LOCAL_MAX || (size_t)threads * per > spare_bytes) return false;
+#if defined(_OPENMP)
+#pragma omp parallel num_threads(threads) if (threads > 1)
+#endif
+  {
+    const int t = nbs__thread_num();
+    const int32_t f = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
+    uint32_t *h = hist + (size_t)t * B;
+    uint32_t start[(size_t)1 << NBS__RADIX_BITS];
+    memcpy(start, h, B * sizeof *h);
+    uint64_t *wb = (uint64_t *)(void *)(spare + (size_t)t * wc);
+    const double *r = run->r;
+    if (dim == 3 && radii) {
+      nbs__cs_part_scatter(kg, x, r, 3, true, f, to, eb, kshift, dmask, h, start, wb, &d);
+    } else if (dim == 3) {
+      nbs__cs_part_scatter(kg, x, r, 3, false, f, to, eb, kshift, dmask, h, start, wb, &d);
+    } else if (radii) {
+      nbs__cs_part_scatter(kg, x, r, 2, true, f, to, eb, kshift, dmask, h, start, wb, &d);
+    } else {
+      nbs__cs_part_scatter(kg, x, r, 2, false, f, to, eb, kshift, dmask, h, start, wb, &d);
+    }
+  }
+#if defined(_OPENMP)
+#pragma omp parallel num_threads(threads) if (threads > 1)
+#endif
+  {
+    const int t = nbs__thread_num();
+    const uint32_t from = (uint32_t)nbs__chunk(n, t, threads);
+    const uint32_t to = (uint32_t)nbs__chunk(n, t + 1, threads);
+    uint32_t *h = hist + (size_t)t * B;
+    uint64_t *other = (uint64_t *)(void *)(spare + (size_t)t * per);
+    int32_t *gid = (int32_t *)(void *)(other + most), *rank = gid + most;
+    for (size_t b = 0; b < B; b++) {
+      if (top[b] < from || top[b] >= to || top[b + 1] == top[b]) continue;
+      nbs__cs_part_bucket(&d, top[b], (int32_t)(top[b + 1] - top[b]), eb, dg, h, other, gid,
+                          rank);
+    }
+  }
+  return true;
+}
+
 /* From scratch: 1. the keys in element order, 2. their radix sort, 3. the gather of the
  * coordinates (and radii) in cell order. */
 static void nbs__cs_sort_gather(const nbs__cs *c, const nbs__run *run, const nbs__cs_keying *kg,
-                                bool packed, int eb, int bits, uint32_t *hist, int threads) {
+                                bool packed, int eb, int bits, uint32_t *hist, int threads,
+                                char *spare, size_t spare_bytes) {
   const int32_t n = c->n;
   const size_t nn = (size_t)n;
   const int dim = c->dim;
@@ -1656,6 +1933,12 @@ static void nbs__cs_sort_gather(const nbs__cs *c, const nbs__run *run, const nbs
   const bool odd = dg.passes % 2 == 1;
   uint64_t *k0 = odd ? tk : c->key, *k1 = odd ? c->key : tk;
   int32_t *i0 = odd ? ti : c->idx, *i1 = odd ? c->idx : ti;
+  /* 1-3 at once, where the input is larger than the last-level cache */
+  const size_t input = nn * (size_t)(dim + (c->rs ? 1 : 0)) * sizeof(double);
+  run->ctx->cs_partitioned =
+      packed && input > run->ctx->cs_part_min &&
+      nbs__cs_partition(c, run, kg, eb, dg, hist, threads, spare, spare_bytes);
+  if (run->ctx->cs_partitioned) return;
   /* 1-2 by the crowded core's keys, where they fit a word with the element and the whole
    * keys do not; else: */
   if (packed || !nbs__cs_core(c, run, kg, eb, bits, hist, threads)) {
@@ -1733,22 +2016,33 @@ static void nbs__cs_anchor(nbs__grid *g) {
   if (after == before) *g = a;
 }
 
-/* The work block's layout: key[n + pad] | idx[n, padded to 8 bytes; used by unpacked keys
- * only] | xs[n * dim] | rs[n, with radii] | hist[threads * 2^9], the same for packed and
+/* The work block's layout, from a 64-byte boundary within the block (nbs__cs_base):
+ * key[n + pad] | idx[n; used by unpacked keys only, and as scratch] | xs, ys[, zs], each
+ * n rounded up to 8 | rs[the same, with radii] | hist[threads * 2^9], each part on a 64-byte
+ * boundary, so that place p of key[] and of every coordinate array lie at the same place of
+ * a cache line (the partition's whole lines, nbs__cs_partition). The same for packed and
  * unpacked keys, so that a scene that spreads out never makes a detection allocate. at[]
- * receives where idx, xs, rs and hist start; the total is returned. */
-static size_t nbs__cs_layout(int dim, int32_t n, bool radii, int threads, size_t at[4]) {
-  const size_t nn = (size_t)n;
-  at[0] = (nn + NBS__CS_PAD) * sizeof(uint64_t);
-  at[1] = at[0] + ((nn * sizeof(int32_t) + 7) & ~(size_t)7);
-  at[2] = at[1] + nn * (size_t)dim * sizeof(double);
-  at[3] = at[2] + (radii ? nn * sizeof(double) : 0);
-  return at[3] + (size_t)threads * ((size_t)1 << NBS__RADIX_BITS) * sizeof(uint32_t);
+ * receives where idx, xs, rs and hist start, *stride the coordinate arrays' length; the total,
+ * with the 64 bytes the boundary may need, is returned. */
+static size_t nbs__cs_layout(int dim, int32_t n, bool radii, int threads, size_t at[4],
+                             size_t *stride) {
+  const size_t nn = (size_t)n, line = 64, ns = (nn + 7) & ~(size_t)7;
+  at[0] = ((nn + NBS__CS_PAD) * sizeof(uint64_t) + line - 1) & ~(line - 1);
+  at[1] = at[0] + ((nn * sizeof(int32_t) + line - 1) & ~(line - 1));
+  at[2] = at[1] + ns * (size_t)dim * sizeof(double);
+  at[3] = at[2] + (radii ? ns * sizeof(double) : 0);
+  *stride = ns;
+  return at[3] + (size_t)threads * ((size_t)1 << NBS__RADIX_BITS) * sizeof(uint32_t) + line;
+}
+
+/* The first 64-byte boundary of the work block. */
+static char *nbs__cs_base(char *work) {
+  return work + ((64 - (uintptr_t)work % 64) % 64);
 }
 
 size_t nbs__cellsort_bytes(int dim, int32_t n, bool radii, int threads) {
-  size_t at[4];
-  return nbs__cs_layout(dim, n, radii, threads, at);
+  size_t at[4], stride;
+  return nbs__cs_layout(dim, n, radii, threads, at, &stride);
 }
 
 /* Below this many elements per thread, one thread is faster. */
@@ -1825,15 +2119,15 @@ nbs_status nbs__cellsort(nbs__run *run) {
   int threads = nbs__threads(ctx, n / NBS__CS_MIN_PER_THREAD);
   /* callbacks and max_pairs need the pairs in one stream */
   if (run->callback || ctx->max_pairs) threads = 1;
-  size_t at[4];
-  const size_t bytes = nbs__cs_layout(dim, n, run->r != NULL, threads, at);
+  size_t at[4], stride;
+  const size_t bytes = nbs__cs_layout(dim, n, run->r != NULL, threads, at, &stride);
   NBS__TRY(nbs__work_reserve(ctx, bytes));
   /* the last detection's cell order, when it is there (a new block holds none) */
   const bool had_order = ctx->work_kind == NBS__WORK_CELLSORT && ctx->cs_order_n == n;
   ctx->work_kind = NBS__WORK_CELLSORT;
   ctx->cs_order_n = 0; /* no order until this detection's is complete */
   ctx->cs_outliers = -1;
-  char *w = ctx->work;
+  char *w = nbs__cs_base(ctx->work);
   nbs__cs c;
   c.run = run;
   c.dim = dim;
@@ -1844,8 +2138,8 @@ nbs_status nbs__cellsort(nbs__run *run) {
   c.ids = packed ? (const int32_t *)(const void *)c.key + (NBS__BIG_ENDIAN ? 1 : 0) : c.idx;
   c.istep = packed ? 2 : 1;
   c.xs = (double *)(void *)(w + at[1]);
-  c.ys = c.xs + nn;
-  c.zs = dim == 3 ? c.ys + nn : NULL;
+  c.ys = c.xs + stride;
+  c.zs = dim == 3 ? c.ys + stride : NULL;
   c.rs = run->r ? (double *)(void *)(w + at[2]) : NULL;
   c.d2 = run->d2;
   c.contacts = run->mode == NBS_MODE_CONTACTS;
@@ -1890,7 +2184,8 @@ nbs_status nbs__cellsort(nbs__run *run) {
   run->reused_order = warm;
   if (!warm) {
     run->moved = 0;
-    nbs__cs_sort_gather(&c, run, &kg, packed, eb, bits, hist, threads);
+    nbs__cs_sort_gather(&c, run, &kg, packed, eb, bits, hist, threads, w + at[0],
+                        at[1] - at[0]);
   }
   for (size_t t = nn; t < nn + NBS__CS_PAD; t++) c.key[t] = UINT64_MAX;
   if (packed) ctx->cs_order_n = n;

@@ -109,6 +109,11 @@ struct nbs_context {
    * else by its crowded core, this many elements (the outliers) apart (nbs__cs_core). Read
    * by the tests, which cannot see it through the API. */
   int64_t cs_outliers;
+  /* cellsort's partition (nbs__cs_partition) is tried where the input's coordinates (and
+   * radii) take more bytes than this (nbs__cellsort_partition_min); cs_partitioned says
+   * whether the last from-scratch detection took it (read by the tests). */
+  size_t cs_part_min;
+  bool cs_partitioned;
 
   /* The pair buffer (buffer mode) and the batch used in callback mode. */
   nbs_pair *pairs;
@@ -293,6 +298,7 @@ size_t nbs__cellsort_bytes(int dim, int32_t n, bool radii, int threads);
  * NBS_SIMD=generic or NBS_SIMD=avx2 asks for a lesser one. */
 enum { NBS__SIMD_GENERIC = 0, NBS__SIMD_AVX512 = 1, NBS__SIMD_AVX2 = 2 };
 int nbs__cellsort_simd(void);
+size_t nbs__cellsort_partition_min(void);
 
 /* Work-block layouts, for work_kind. */
 enum { NBS__WORK_NONE = 0, NBS__WORK_SCREENING = 1, NBS__WORK_SORTING = 2, NBS__WORK_NBS = 3,

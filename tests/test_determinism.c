@@ -5,6 +5,8 @@
  *   - across time steps: cellsort's start from the last detection's cell order gives the
  *     bytes of a detection from scratch, whatever the elements did since;
  *   - across thread counts: cellsort (and auto) with 1, 2, 3, 4, 7 and 8 threads, in order;
+ *   - across sorts: cellsort's partition (NBS_PARTITION=always) and its sort and gather
+ *     (NBS_PARTITION=never), in order, with 1 to 8 threads;
  *   - across kernels: cellsort's AVX-512 kernel (where the processor has it) and its generic
  *     one (NBS_SIMD=generic), in order, and so does the AVX2 one (NBS_SIMD=avx2);
  *   - across algorithms: after nbs_sort_pairs every algorithm gives the same bytes;
@@ -311,6 +313,79 @@ static void test_thread_counts(void) {
   }
 }
 
+/* The partition: cellsort's sort by the top digit with the coordinates carried along
+ * (NBS_PARTITION=always, read when a context is created; by default only inputs larger than
+ * 32 MiB take it) gives the bytes of the sort and the gather (NBS_PARTITION=never), in
+ * order, in both modes, for 1, 2 and 3 threads (the most 60000 elements get), from scratch
+ * and again from the order it left (the time-step start). The scenes: uniform (in 2D with
+ * a sparse part, whose buckets hold an element or two) and quantized (exact ties, which the
+ * partition must keep in element order), with radii, and a strip; 2D and 3D, each with
+ * digits of at most 7 bits (the partition needs as many elements as the square of the
+ * buckets); the partition must have run on each (ctx->cs_partitioned). And a sheet: 60000
+ * of 70000 elements in one layer, whose top digit they share, so that the partition, having
+ * counted the digits, must give way to the sort (a bucket too large for a cache). */
+static void test_partition(void) {
+  const int counts[] = {1, 2, 3};
+  for (int sc = 0; sc < 9; sc++) {
+    const int dim = sc == 8 ? 3 : 2 + sc % 2;
+    scene s;
+    switch (sc / 2) {
+    case 0:
+      s = det_scene(DET_UNIFORM, dim, 60000, dim == 2 ? 250.0 : 40.0, 0.0, 31);
+      /* 2D: every 500th element moved up into [250, 500): buckets of an element or two,
+       * whose places begin and end inside one line */
+      for (int64_t k = 0; dim == 2 && k < s.n; k += 500) s.coords[k * 2 + 1] += 250.0;
+      break;
+    case 1: s = det_scene(DET_QUANTIZED, dim, 60000, dim == 2 ? 300.0 : 45.0, 0.0, 32); break;
+    case 2: s = det_scene(DET_RADII, dim, 60000, dim == 2 ? 200.0 : 35.0, 0.0, 33); break;
+    case 3:
+      s = det_scene(DET_STRIP, dim, 60000, dim == 2 ? 40000.0 : 15000.0, 0.0, 34);
+      break;
+    default:
+      /* the sheet: z in [0, 1) for all but every seventh element */
+      s = det_scene(DET_UNIFORM, 3, 70000, 300.0, 0.0, 35);
+      for (int64_t k = 0; k < s.n; k++) {
+        if (k % 7 != 0) s.coords[k * 3 + 2] /= 300.0;
+      }
+      break;
+    }
+    const bool expect = sc < 8;
+    for (size_t t = 0; t < sizeof counts / sizeof *counts; t++) {
+      for (int mode = 0; mode < 2; mode++) {
+        nbs_context_def cdef = nbs_default_context_def();
+        cdef.threads = counts[t];
+        nbs_context *part, *sort;
+        ASSERT_TRUE(setenv("NBS_PARTITION", "always", 1) == 0);
+        nbs_status st = nbs_context_create(&cdef, &part);
+        ASSERT_TRUE(setenv("NBS_PARTITION", "never", 1) == 0);
+        nbs_status st2 = nbs_context_create(&cdef, &sort);
+        unsetenv("NBS_PARTITION");
+        ASSERT_OK(st);
+        ASSERT_OK(st2);
+        pair_list a, b, again;
+        ASSERT_OK(detect_raw(part, &s, NBS_CELLSORT, (nbs_mode)mode, &a));
+        const bool took = part->cs_partitioned;
+        ASSERT_OK(detect_raw(sort, &s, NBS_CELLSORT, (nbs_mode)mode, &b));
+        CHECK_MSG(!sort->cs_partitioned, "scene %d: NBS_PARTITION=never partitioned", sc);
+        ASSERT_OK(detect_raw(part, &s, NBS_CELLSORT, (nbs_mode)mode, &again));
+        CHECK_MSG(took == expect, "scene %d (%dD), %d threads: the partition %s", sc, dim,
+                  counts[t], took ? "ran" : "did not run");
+        CHECK_MSG(a.count > (size_t)s.n / 4, "scene %d: only %zu pairs", sc, a.count);
+        CHECK_MSG(same_bytes(&a, &b), "scene %d (%dD) mode %d, %d threads: the partition "
+                  "differs from the sort", sc, dim, mode, counts[t]);
+        CHECK_MSG(same_bytes(&again, &b), "scene %d (%dD) mode %d, %d threads: the start from "
+                  "the partition's order differs", sc, dim, mode, counts[t]);
+        pair_list_free(&a);
+        pair_list_free(&b);
+        pair_list_free(&again);
+        nbs_context_destroy(part);
+        nbs_context_destroy(sort);
+      }
+    }
+    scene_free(&s);
+  }
+}
+
 /* Moves elements k = first, first + every, ... by up to amp per axis (amp < 0: by -amp
  * or 0 or amp, exactly: quantized scenes stay on their grid). */
 static void det_move(scene *s, int64_t first, int64_t every, double amp, uint64_t *rng) {
@@ -586,6 +661,7 @@ int main(int argc, char **argv) {
       {"hash_function", test_hash_function},
       {"repeat_runs", test_repeat_runs},
       {"thread_counts", test_thread_counts},
+      {"partition", test_partition},
       {"kernels", test_kernels},
       {"time_steps", test_time_steps},
       {"golden_hashes", test_golden_hashes},
