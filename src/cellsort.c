@@ -1844,6 +1844,12 @@ static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__
   const int kshift = (dg.passes - 1) * dg.width;
   const uint64_t dmask = B - 1;
   const double *x = run->x;
+  uint32_t top[((size_t)1 << NBS__RADIX_BITS) + 1];
+  uint32_t most = 0;
+  size_t per = 0;
+  bool fits = true;
+  /* one region: the counts, then (one thread) where each thread's part of each bucket
+   * starts, then the scatter, which the buckets' sizes may call off */
 #if defined(_OPENMP)
 #pragma omp parallel num_threads(threads) if (threads > 1)
 #endif
@@ -1856,61 +1862,57 @@ static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__
     } else {
       nbs__cs_part_count(kg, x, 2, f, to, kshift, dmask, h);
     }
-  }
-  uint32_t top[((size_t)1 << NBS__RADIX_BITS) + 1];
-  uint32_t sum = 0, most = 0;
-  for (size_t b = 0; b < B; b++) {
-    top[b] = sum;
-    for (int t = 0; t < threads; t++) {
-      const uint32_t cnt = hist[(size_t)t * B + b];
-      hist[(size_t)t * B + b] = sum;
-      sum += cnt;
-    }
-    if (sum - top[b] > most) most = sum - top[b];
-  }
-  top[B] = sum;
-  /* each thread's scratch for a bucket: the words' sort and the coordinates' permutation
-   * (8 bytes per entry), the elements (4), on a line's boundary */
-  const size_t per = ((size_t)most * 16 + 63) & ~(size_t)63;
-  if (most > NBS__RADIX_LOCAL_MAX || (size_t)threads * per > spare_bytes) return false;
 #if defined(_OPENMP)
-#pragma omp parallel num_threads(threads) if (threads > 1)
+#pragma omp barrier
+#pragma omp single
 #endif
-  {
-    const int t = nbs__thread_num();
-    const int32_t f = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
-    uint32_t *h = hist + (size_t)t * B;
-    uint32_t start[(size_t)1 << NBS__RADIX_BITS];
-    memcpy(start, h, B * sizeof *h);
-    uint64_t *wb = (uint64_t *)(void *)(spare + (size_t)t * wc);
-    const double *r = run->r;
-    if (dim == 3 && radii) {
-      nbs__cs_part_scatter(kg, x, r, 3, true, f, to, eb, kshift, dmask, h, start, wb, &d);
-    } else if (dim == 3) {
-      nbs__cs_part_scatter(kg, x, r, 3, false, f, to, eb, kshift, dmask, h, start, wb, &d);
-    } else if (radii) {
-      nbs__cs_part_scatter(kg, x, r, 2, true, f, to, eb, kshift, dmask, h, start, wb, &d);
-    } else {
-      nbs__cs_part_scatter(kg, x, r, 2, false, f, to, eb, kshift, dmask, h, start, wb, &d);
+    {
+      uint32_t sum = 0;
+      for (size_t b = 0; b < B; b++) {
+        top[b] = sum;
+        for (int u = 0; u < threads; u++) {
+          const uint32_t cnt = hist[(size_t)u * B + b];
+          hist[(size_t)u * B + b] = sum;
+          sum += cnt;
+        }
+        if (sum - top[b] > most) most = sum - top[b];
+      }
+      top[B] = sum;
+      /* each thread's scratch for a bucket: the words' sort and the coordinates'
+       * permutation (8 bytes per entry), the elements and their ranks (4 each), on a line's
+       * boundary */
+      per = ((size_t)most * 16 + 63) & ~(size_t)63;
+      fits = most <= NBS__RADIX_LOCAL_MAX && (size_t)threads * per <= spare_bytes;
     }
-  }
+    if (fits) {
+      uint32_t start[(size_t)1 << NBS__RADIX_BITS];
+      memcpy(start, h, B * sizeof *h);
+      uint64_t *wb = (uint64_t *)(void *)(spare + (size_t)t * wc);
+      const double *r = run->r;
+      if (dim == 3 && radii) {
+        nbs__cs_part_scatter(kg, x, r, 3, true, f, to, eb, kshift, dmask, h, start, wb, &d);
+      } else if (dim == 3) {
+        nbs__cs_part_scatter(kg, x, r, 3, false, f, to, eb, kshift, dmask, h, start, wb, &d);
+      } else if (radii) {
+        nbs__cs_part_scatter(kg, x, r, 2, true, f, to, eb, kshift, dmask, h, start, wb, &d);
+      } else {
+        nbs__cs_part_scatter(kg, x, r, 2, false, f, to, eb, kshift, dmask, h, start, wb, &d);
+      }
+      /* then each thread sorts the buckets that start in its part */
 #if defined(_OPENMP)
-#pragma omp parallel num_threads(threads) if (threads > 1)
+#pragma omp barrier
 #endif
-  {
-    const int t = nbs__thread_num();
-    const uint32_t from = (uint32_t)nbs__chunk(n, t, threads);
-    const uint32_t to = (uint32_t)nbs__chunk(n, t + 1, threads);
-    uint32_t *h = hist + (size_t)t * B;
-    uint64_t *other = (uint64_t *)(void *)(spare + (size_t)t * per);
-    int32_t *gid = (int32_t *)(void *)(other + most), *rank = gid + most;
-    for (size_t b = 0; b < B; b++) {
-      if (top[b] < from || top[b] >= to || top[b + 1] == top[b]) continue;
-      nbs__cs_part_bucket(&d, top[b], (int32_t)(top[b + 1] - top[b]), eb, dg, h, other, gid,
-                          rank);
+      const uint32_t from = (uint32_t)f, end = (uint32_t)to;
+      uint64_t *other = (uint64_t *)(void *)(spare + (size_t)t * per);
+      int32_t *gid = (int32_t *)(void *)(other + most), *rank = gid + most;
+      for (size_t b = 0; b < B; b++) {
+        if (top[b] < from || top[b] >= end || top[b + 1] == top[b]) continue;
+        nbs__cs_part_bucket(&d, top[b], (int32_t)(top[b + 1] - top[b]), eb, dg, h, other, gid,
+                            rank);
+      }
     }
   }
-  return true;
+  return fits;
 }
 
 /* From scratch: 1. the keys in element order, 2. their radix sort, 3. the gather of the
