@@ -216,6 +216,35 @@ static inline void nbs__radix_scatter(const uint64_t *sk, const int32_t *si, uin
   }
 }
 
+/* The counts of `threads` histograms of `buckets` each (hist, thread t's at t * buckets)
+ * turned into places: each thread's part of a bucket after the threads' before it, the
+ * buckets one after the other. top[b] (where top is not NULL) receives where bucket b
+ * starts, top[buckets] the total. Returns the largest bucket's size. */
+static uint32_t nbs__radix_offsets(uint32_t *hist, size_t buckets, int threads,
+                                   uint32_t *top) {
+  uint32_t sum = 0, most = 0;
+  for (size_t b = 0; b < buckets; b++) {
+    const uint32_t b0 = sum;
+    if (top) top[b] = b0;
+    for (int t = 0; t < threads; t++) {
+      const uint32_t c = hist[(size_t)t * buckets + b];
+      hist[(size_t)t * buckets + b] = sum;
+      sum += c;
+    }
+    if (sum - b0 > most) most = sum - b0;
+  }
+  if (top) top[buckets] = sum;
+  return most;
+}
+
+/* Whether n packed keys of the digits dg are sorted by the top digit first, and then each
+ * bucket in cache (nbs__radix, and the partition, nbs__cs_partition): where there are two
+ * digits or more and at least as many keys as the square of the buckets (the buckets'
+ * histograms then cost at most one step per key and pass). */
+static bool nbs__radix_top_first(int32_t n, nbs__digits dg) {
+  return dg.passes >= 2 && (uint64_t)n >= (uint64_t)dg.buckets * dg.buckets;
+}
+
 /* One stable counting pass of the digit at `shift` (dg's width) over n keys, sk (and si) to
  * dk (and di). With several threads each takes a contiguous part of the input and scatters
  * it after the parts of the threads before it, bucket by bucket: the pass stays stable, so
@@ -240,17 +269,8 @@ static bool nbs__radix_pass(const uint64_t *sk, const int32_t *si, uint64_t *dk,
   uint64_t same = 0;
   for (int t = 0; t < threads; t++) same += hist[(size_t)t * buckets + d0];
   if (same == (uint64_t)n) return false;
-  uint32_t sum = 0;
-  for (size_t b = 0; b < buckets; b++) {
-    if (top) top[b] = sum;
-    for (int t = 0; t < threads; t++) {
-      uint32_t c = hist[(size_t)t * buckets + b];
-      hist[(size_t)t * buckets + b] = sum;
-      sum += c;
-    }
-    if (top && sum - top[b] > NBS__RADIX_LOCAL_MAX) return false;
-  }
-  if (top) top[buckets] = sum;
+  const uint32_t most = nbs__radix_offsets(hist, buckets, threads, top);
+  if (top && most > NBS__RADIX_LOCAL_MAX) return false;
 #if defined(_OPENMP)
 #pragma omp parallel num_threads(threads) if (threads > 1)
 #endif
@@ -327,7 +347,7 @@ static void nbs__radix_local(uint64_t *a, uint64_t *out, uint64_t *other, int32_
 static void nbs__radix(uint64_t *sk, int32_t *si, uint64_t *dk, int32_t *di, uint64_t *out_k,
                        int32_t *out_i, int32_t n, int low, nbs__digits dg, uint32_t *hist,
                        int threads, uint64_t *scratch, size_t scratch_words) {
-  if (!si && dg.passes >= 2 && (uint64_t)n >= (uint64_t)dg.buckets * dg.buckets) {
+  if (!si && nbs__radix_top_first(n, dg)) {
     uint32_t top[((size_t)1 << NBS__RADIX_BITS) + 1];
     const int shift = low + (dg.passes - 1) * dg.width;
     if (nbs__radix_pass(sk, si, dk, di, n, shift, dg, hist, threads, top)) {
@@ -1709,10 +1729,10 @@ nbs__cs_part_count(const nbs__cs_keying *kg, const double *restrict x, int dim, 
 
 /* The elements [f, to) to their buckets: element k's word (key << eb | k), coordinates (and
  * radius) to place h[b]++ of the arrays, b its key's top digit. Each bucket gathers a line
- * of each array in the buffers wb and cb (a line of 8 entries per bucket and array) and
- * writes it whole when it is full; start[b] is the bucket's first place of this thread, and
- * a line that holds places of another (its first, and its last) is written entry by entry.
- * dim and radii are constants where this is inlined. */
+ * of each array in the buffer wb (per bucket, a line of 8 entries of its words, then one of
+ * each coordinate array) and writes it whole when it is full; start[b] is the bucket's first
+ * place of this thread, and a line that holds places of another (its first, and its last)
+ * is written entry by entry. dim and radii are constants where this is inlined. */
 static inline __attribute__((always_inline)) void
 nbs__cs_part_scatter(const nbs__cs_keying *kg, const double *restrict x,
                      const double *restrict r, int dim, bool radii, int32_t f, int32_t to,
@@ -1838,9 +1858,7 @@ static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__
   d.a[3] = dim == 3 ? c->rs : NULL;
   d.S = dim + (radii ? 1 : 0);
   const size_t wc = B * (size_t)(1 + d.S) * NBS__CS_LINE * sizeof(uint64_t);
-  if (dg.passes < 2 || (uint64_t)n < (uint64_t)B * B || (size_t)threads * wc > spare_bytes) {
-    return false;
-  }
+  if (!nbs__radix_top_first(n, dg) || (size_t)threads * wc > spare_bytes) return false;
   const int kshift = (dg.passes - 1) * dg.width;
   const uint64_t dmask = B - 1;
   const double *x = run->x;
@@ -1867,17 +1885,7 @@ static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__
 #pragma omp single
 #endif
     {
-      uint32_t sum = 0;
-      for (size_t b = 0; b < B; b++) {
-        top[b] = sum;
-        for (int u = 0; u < threads; u++) {
-          const uint32_t cnt = hist[(size_t)u * B + b];
-          hist[(size_t)u * B + b] = sum;
-          sum += cnt;
-        }
-        if (sum - top[b] > most) most = sum - top[b];
-      }
-      top[B] = sum;
+      most = nbs__radix_offsets(hist, B, threads, top);
       /* each thread's scratch for a bucket: the words' sort and the coordinates'
        * permutation (8 bytes per entry), the elements and their ranks (4 each), on a line's
        * boundary */
