@@ -2090,6 +2090,7 @@ nbs_status nbs__cellsort(nbs__run *run) {
    * time would go to finding rows and windows, not to testing pairs. */
   int kc[3];
   nbs__axis_order(dim, run->grid.n, 0, kc);
+  for (int a = 0; a < 3; a++) ctx->axes[a] = (int8_t)kc[a];
   nbs__grid anchored = nbs__grid_reorder(&run->grid, kc);
   const nbs__grid *g = &anchored;
   if (!g->fits) {

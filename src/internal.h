@@ -114,6 +114,11 @@ struct nbs_context {
    * whether the last from-scratch detection took it (read by the tests). */
   size_t cs_part_min;
   bool cs_partitioned;
+  /* The caller's coordinate of each axis of the last cellsort or nbs detection, in the
+   * algorithm's order: cellsort's key x (the rows), y, z; nbs's x-, y- and z-lists (2D: x-
+   * and y-lists). Which axis takes which place changes the speed, never the pairs' set
+   * (nbs__axis_order); read by the tests. */
+  int8_t axes[3];
 
   /* The pair buffer (buffer mode) and the batch used in callback mode. */
   nbs_pair *pairs;

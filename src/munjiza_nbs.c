@@ -1115,6 +1115,7 @@ nbs_status nbs__nbs(nbs__run *run) {
   /* NBS's axes in their order (the grid's, permuted), and the lists of each */
   int at[3];
   nbs__axis_order(dim, lists, dim - 1, at);
+  for (int a = 0; a < 3; a++) ctx->axes[a] = (int8_t)at[a];
   const nbs__grid grid = nbs__grid_reorder(g, at);
   nbs__nbs_axes axes = {&grid, {-1, -1, -1}, {0, 1, 2}, fold};
   int64_t nl[3] = {1, 1, 1};

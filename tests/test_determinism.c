@@ -10,6 +10,10 @@
  *   - across kernels: cellsort's AVX-512 kernel (where the processor has it) and its generic
  *     one (NBS_SIMD=generic), in order, and so does the AVX2 one (NBS_SIMD=avx2);
  *   - across algorithms: after nbs_sort_pairs every algorithm gives the same bytes;
+ *   - across orientations: the axis cellsort's rows and nbs's outer lists lie along is
+ *     chosen by the cells per axis (nbs__axis_order), which fixes the order of the pairs and
+ *     the speed: a slab, a strip and a rod, turned, take the axis the rule says, and give
+ *     direct's pairs;
  *   - across builds and machines: golden hashes (FNV-1a 64 of the sorted pair list, each
  *     index as 4 little-endian bytes) of fixed scenes, committed below.
  *
@@ -640,6 +644,125 @@ static void test_golden_hashes(void) {
   if (print) printf("};\n");
 }
 
+/* The scene s with its coordinates turned: coordinate a of the result is coordinate
+ * from[a] of s. */
+static scene turned(const scene *s, const int from[3]) {
+  scene t = *s;
+  t.coords = malloc((size_t)s->n * (size_t)s->dim * sizeof *t.coords);
+  t.radii = NULL;
+  if (!t.coords) abort();
+  for (int64_t k = 0; k < s->n; k++) {
+    for (int a = 0; a < s->dim; a++) t.coords[k * s->dim + a] = s->coords[k * s->dim + from[a]];
+  }
+  return t;
+}
+
+/* The rule (nbs__axis_order): the slot's axis is the one with the most cells where it has
+ * at least twice as many as the slot's own axis (the later axis on a tie), and the other
+ * axes keep their order; then the axes detections choose on turned scenes, with the pairs
+ * checked against direct's. cellsort's slot is the key's x (its rows), nbs's the outer
+ * lists' (z in 3D, y in 2D). */
+static void test_axis_order(void) {
+  static const struct {
+    int dim, slot;
+    int64_t count[3];
+    int at[3];
+  } rules[] = {
+      {3, 0, {10, 15, 12}, {0, 1, 2}}, {3, 0, {10, 20, 5}, {1, 0, 2}},
+      {3, 0, {10, 5, 30}, {2, 0, 1}},  {3, 0, {10, 30, 30}, {2, 0, 1}},
+      {3, 0, {10, 19, 19}, {0, 1, 2}}, {3, 2, {100, 10, 10}, {1, 2, 0}},
+      {3, 2, {10, 10, 10}, {0, 1, 2}}, {3, 2, {10, 40, 10}, {0, 2, 1}},
+      {2, 1, {100, 10, 0}, {1, 0, 2}}, {2, 1, {10, 100, 0}, {0, 1, 2}},
+      {2, 0, {10, 100, 0}, {1, 0, 2}}, {2, 0, {100, 10, 0}, {0, 1, 2}},
+  };
+  for (size_t r = 0; r < sizeof rules / sizeof *rules; r++) {
+    int at[3] = {-1, -1, -1};
+    nbs__axis_order(rules[r].dim, rules[r].count, rules[r].slot, at);
+    CHECK_MSG(at[0] == rules[r].at[0] && at[1] == rules[r].at[1] && at[2] == rules[r].at[2],
+              "rule %zu: axes %d %d %d, expected %d %d %d", r, at[0], at[1], at[2],
+              rules[r].at[0], rules[r].at[1], rules[r].at[2]);
+  }
+
+  /* A slab (a strip in 2D) is thin on its last axis; turned, on each axis in turn. The
+   * long axes have about as many cells each, so a thin axis never takes a slot, and a wide
+   * one takes the slot of a thin one. */
+  for (int dim = 2; dim <= 3; dim++) {
+    scene slab = test_scene(SCENE_SLAB, dim, 6000, 0.5);
+    for (int thin = 0; thin < dim; thin++) {
+      int from[3] = {0, 1, 2};
+      from[thin] = dim - 1; /* the slab's thin axis becomes `thin` */
+      from[dim - 1] = thin;
+      scene s = turned(&slab, from);
+      nbs_context *ctx;
+      ASSERT_OK(nbs_context_create(NULL, &ctx));
+      pair_list ref, got;
+      ASSERT_OK(detect_sorted(ctx, &s, NBS_DIRECT, NBS_MODE_CONTACTS, &ref));
+      for (int a = 0; a < 2; a++) {
+        const nbs_algorithm algo = a == 0 ? NBS_CELLSORT : NBS_NBS;
+        const int slot = a == 0 ? 0 : dim - 1;
+        ASSERT_OK(detect_sorted(ctx, &s, algo, NBS_MODE_CONTACTS, &got));
+        CHECK_MSG(same_bytes(&got, &ref), "%dD slab thin on %d: %s's contacts differ", dim,
+                  thin, nbs_algorithm_name(algo));
+        pair_list_free(&got);
+        /* the slot keeps its axis unless that is the thin one */
+        const int want = thin == slot ? -1 : slot;
+        if (want >= 0) {
+          CHECK_MSG(ctx->axes[slot] == want, "%dD slab thin on %d: %s's slot %d took axis %d",
+                    dim, thin, nbs_algorithm_name(algo), slot, ctx->axes[slot]);
+        } else {
+          CHECK_MSG(ctx->axes[slot] != thin, "%dD slab thin on %d: %s's slot kept it", dim,
+                    thin, nbs_algorithm_name(algo));
+        }
+        /* the other axes keep their order */
+        for (int i = 0, prev = -1; i < dim; i++) {
+          if (i == slot) continue;
+          CHECK_MSG(ctx->axes[i] > prev, "%dD slab thin on %d: %s's axes out of order", dim,
+                    thin, nbs_algorithm_name(algo));
+          prev = ctx->axes[i];
+        }
+      }
+      pair_list_free(&ref);
+      nbs_context_destroy(ctx);
+      free(s.coords);
+    }
+    scene_free(&slab);
+  }
+
+  /* A rod along each axis of 3D (the slab's coordinates, two of them thin): both slots take
+   * the rod's axis. */
+  scene slab = test_scene(SCENE_SLAB, 2, 6000, 0.5);
+  for (int along = 0; along < 3; along++) {
+    scene rod = slab;
+    rod.dim = 3;
+    rod.coords = malloc((size_t)slab.n * 3 * sizeof *rod.coords);
+    if (!rod.coords) abort();
+    for (int64_t k = 0; k < slab.n; k++) {
+      for (int a = 0; a < 3; a++) {
+        /* the strip's long x along `along`, its thin y on the others */
+        rod.coords[k * 3 + a] = a == along ? slab.coords[k * 2] : slab.coords[k * 2 + 1];
+      }
+    }
+    nbs_context *ctx;
+    ASSERT_OK(nbs_context_create(NULL, &ctx));
+    pair_list ref, got;
+    ASSERT_OK(detect_sorted(ctx, &rod, NBS_DIRECT, NBS_MODE_CONTACTS, &ref));
+    for (int a = 0; a < 2; a++) {
+      const nbs_algorithm algo = a == 0 ? NBS_CELLSORT : NBS_NBS;
+      const int slot = a == 0 ? 0 : 2;
+      ASSERT_OK(detect_sorted(ctx, &rod, algo, NBS_MODE_CONTACTS, &got));
+      CHECK_MSG(same_bytes(&got, &ref), "rod along %d: %s's contacts differ", along,
+                nbs_algorithm_name(algo));
+      CHECK_MSG(ctx->axes[slot] == along, "rod along %d: %s's slot %d took axis %d", along,
+                nbs_algorithm_name(algo), slot, ctx->axes[slot]);
+      pair_list_free(&got);
+    }
+    pair_list_free(&ref);
+    nbs_context_destroy(ctx);
+    free(rod.coords);
+  }
+  scene_free(&slab);
+}
+
 /* The hash itself, on known bytes, so that a broken hash cannot pass for a stable one. */
 static void test_hash_function(void) {
   CHECK_TRUE(fnv1a_pairs(NULL, 0) == 0xcbf29ce484222325ull);
@@ -665,6 +788,7 @@ int main(int argc, char **argv) {
       {"kernels", test_kernels},
       {"time_steps", test_time_steps},
       {"golden_hashes", test_golden_hashes},
+      {"axis_order", test_axis_order},
   };
   int rc = test_main(argc, argv, tests, sizeof tests / sizeof *tests);
   printf("%ld pair lists compared byte for byte\n", lists_compared);
