@@ -24,6 +24,14 @@
  *      the last-level cache (32 MiB), steps 1-3 are instead one partition by the top digit
  *      that carries the coordinates along in whole lines, then each bucket put in order in
  *      cache (nbs__cs_partition: N = 1e7, 3D 40.9 -> 39.2 ns per element, 2D 25.1 -> 22.6).
+ *      Tried and left out: the gather deferred into the sweep, each block gathering the
+ *      places it is about to read (and, with threads, each thread first the places the next
+ *      one reads before its range), so that the kernel's work would hide the gather's waits
+ *      on memory. On an instance where the gather took 10 ns per element (3D, N = 1e6) the
+ *      detection was the same (36.0 against 36.0 ns, min of 5, for gathers of exactly the
+ *      block's places; 32 places ahead 1-2 ns slower): perf moved the waits from the gather
+ *      (25% -> 19%) to the kernel (32% -> 40%). The random reads are limited by how many
+ *      lines the core can have in flight, not by when they are asked for;
  *      Tried and left out: the same partition with a plain store of each entry to each of
  *      the 5 arrays (word, element and coordinates) of its bucket: it cost more than the
  *      gather and the key pass it replaced (3D, one thread, interleaved, min of 4: N = 1e6
