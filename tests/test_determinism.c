@@ -8,7 +8,8 @@
  *   - across sorts: cellsort's partition (NBS_PARTITION=always) and its sort and gather
  *     (NBS_PARTITION=never), in order, with 1 to 8 threads;
  *   - across kernels: cellsort's AVX-512 kernel (where the processor has it) and its generic
- *     one (NBS_SIMD=generic), in order, and so does the AVX2 one (NBS_SIMD=avx2);
+ *     one (NBS_SIMD=generic), in order, and so does the AVX2 one (NBS_SIMD=avx2); nbs's
+ *     AVX-512 test of the gathered candidates and its plain one the same;
  *   - across algorithms: after nbs_sort_pairs every algorithm gives the same bytes;
  *   - across orientations: the axis cellsort's rows and nbs's outer lists lie along is
  *     chosen by the cells per axis (nbs__axis_order), which fixes the order of the pairs and
@@ -587,6 +588,18 @@ static void test_kernels(void) {
                   kernels[kn] ? kernels[kn] : "default");
         pair_list_free(&a);
         pair_list_free(&b);
+        /* nbs's test of the gathered candidates (AVX-512 where the processor has it) */
+        st = detect_raw(other, &s, NBS_NBS, (nbs_mode)mode, &a);
+        if (st == NBS_OK) {
+          ASSERT_OK(detect_raw(generic, &s, NBS_NBS, (nbs_mode)mode, &b));
+          CHECK_MSG(same_bytes(&a, &b), "%s nbs mode %d: the %s test differs from the plain one",
+                    cases[c].name, mode, kernels[kn] ? kernels[kn] : "default");
+          pair_list_free(&a);
+          pair_list_free(&b);
+        } else {
+          CHECK_MSG(st == NBS_ERR_BUDGET || st == NBS_ERR_EXTENT, "%s nbs: %s", cases[c].name,
+                    nbs_status_name(st));
+        }
         nbs_context_destroy(other);
         nbs_context_destroy(generic);
       }
