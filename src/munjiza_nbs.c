@@ -557,11 +557,11 @@ nbs__nbs_pairs(nbs__run *run, const nbs__nbs_block *K, int dim, int32_t a, const
 /* The four neighbour lists are walked side by side. K->e[-1] is a sentinel whose link is
  * NBS__EMPTY, so that a walk that has ended stays ended without a branch; the entries met
  * are gathered, up to NBS__NBS_GATHER at a time, and every element of the central cell is
- * tested against them. With `soa` (AVX-512) their coordinates, radii and numbers are
- * copied as they are met, for nbs__nbs_test512: 3D, N = 1e4, 1e6, 1e7 68.5 -> 65.1,
- * 105.7 -> 98.3, 126.9 -> 117.9 ns per element (interleaved, min of 3); without the vector
- * test the copies cost more than they save (75.7 at 1e4), so the generic build gathers the
- * entries only. Same pairs in the same order either way. */
+ * tested against them. With `soa` (AVX-512, in 3D or with radii) their coordinates, radii
+ * and numbers are copied as they are met, for nbs__nbs_test512 (figures in the file
+ * comment); without the vector test the copies cost more than they save (3D, N = 1e4:
+ * 68.5 -> 75.7 ns per element), so otherwise only the entries are gathered. Same pairs in
+ * the same order either way. */
 static inline nbs_status nbs__nbs_check_cell(nbs__run *run, const nbs__nbs_block *K, int dim,
                                              int32_t c, const int32_t nb[4]) {
   /* the vector test where the candidates are many: 3D, or radii (whose cells are larger);
