@@ -670,6 +670,25 @@ static scene turned(const scene *s, const int from[3]) {
   return t;
 }
 
+/* Detects the contacts of s with cellsort and nbs, checks them against direct's, and gives
+ * the axes each took (ctx->axes: axes[0] cellsort's, axes[1] nbs's). */
+static void took_axes(const scene *s, const char *what, int8_t axes[2][3]) {
+  nbs_context *ctx;
+  ASSERT_OK(nbs_context_create(NULL, &ctx));
+  pair_list ref, got;
+  ASSERT_OK(detect_sorted(ctx, s, NBS_DIRECT, NBS_MODE_CONTACTS, &ref));
+  for (int a = 0; a < 2; a++) {
+    const nbs_algorithm algo = a == 0 ? NBS_CELLSORT : NBS_NBS;
+    ASSERT_OK(detect_sorted(ctx, s, algo, NBS_MODE_CONTACTS, &got));
+    CHECK_MSG(same_bytes(&got, &ref), "%s: %s's contacts differ from direct's", what,
+              nbs_algorithm_name(algo));
+    memcpy(axes[a], ctx->axes, sizeof ctx->axes);
+    pair_list_free(&got);
+  }
+  pair_list_free(&ref);
+  nbs_context_destroy(ctx);
+}
+
 /* The rule (nbs__axis_order): the slot's axis is the one with the most cells where it has
  * at least twice as many as the slot's own axis (the later axis on a tie), and the other
  * axes keep their order; then the axes detections choose on turned scenes, with the pairs
@@ -706,74 +725,54 @@ static void test_axis_order(void) {
       from[thin] = dim - 1; /* the slab's thin axis becomes `thin` */
       from[dim - 1] = thin;
       scene s = turned(&slab, from);
-      nbs_context *ctx;
-      ASSERT_OK(nbs_context_create(NULL, &ctx));
-      pair_list ref, got;
-      ASSERT_OK(detect_sorted(ctx, &s, NBS_DIRECT, NBS_MODE_CONTACTS, &ref));
+      char what[64];
+      snprintf(what, sizeof what, "%dD slab thin on %d", dim, thin);
+      int8_t axes[2][3];
+      took_axes(&s, what, axes);
       for (int a = 0; a < 2; a++) {
-        const nbs_algorithm algo = a == 0 ? NBS_CELLSORT : NBS_NBS;
+        const char *name = nbs_algorithm_name(a == 0 ? NBS_CELLSORT : NBS_NBS);
         const int slot = a == 0 ? 0 : dim - 1;
-        ASSERT_OK(detect_sorted(ctx, &s, algo, NBS_MODE_CONTACTS, &got));
-        CHECK_MSG(same_bytes(&got, &ref), "%dD slab thin on %d: %s's contacts differ", dim,
-                  thin, nbs_algorithm_name(algo));
-        pair_list_free(&got);
         /* the slot keeps its axis unless that is the thin one */
-        const int want = thin == slot ? -1 : slot;
-        if (want >= 0) {
-          CHECK_MSG(ctx->axes[slot] == want, "%dD slab thin on %d: %s's slot %d took axis %d",
-                    dim, thin, nbs_algorithm_name(algo), slot, ctx->axes[slot]);
+        if (thin != slot) {
+          CHECK_MSG(axes[a][slot] == slot, "%s: %s's slot %d took axis %d", what, name, slot,
+                    axes[a][slot]);
         } else {
-          CHECK_MSG(ctx->axes[slot] != thin, "%dD slab thin on %d: %s's slot kept it", dim,
-                    thin, nbs_algorithm_name(algo));
+          CHECK_MSG(axes[a][slot] != thin, "%s: %s's slot kept it", what, name);
         }
         /* the other axes keep their order */
         for (int i = 0, prev = -1; i < dim; i++) {
           if (i == slot) continue;
-          CHECK_MSG(ctx->axes[i] > prev, "%dD slab thin on %d: %s's axes out of order", dim,
-                    thin, nbs_algorithm_name(algo));
-          prev = ctx->axes[i];
+          CHECK_MSG(axes[a][i] > prev, "%s: %s's axes out of order", what, name);
+          prev = axes[a][i];
         }
       }
-      pair_list_free(&ref);
-      nbs_context_destroy(ctx);
       free(s.coords);
     }
     scene_free(&slab);
   }
 
-  /* A rod along each axis of 3D (the slab's coordinates, two of them thin): both slots take
-   * the rod's axis. */
-  scene slab = test_scene(SCENE_SLAB, 2, 6000, 0.5);
+  /* A rod along each axis of 3D (the strip's coordinates, its thin one on two axes): both
+   * slots take the rod's axis. */
+  scene strip = test_scene(SCENE_SLAB, 2, 6000, 0.5);
   for (int along = 0; along < 3; along++) {
-    scene rod = slab;
+    scene rod = strip;
     rod.dim = 3;
-    rod.coords = malloc((size_t)slab.n * 3 * sizeof *rod.coords);
+    rod.coords = malloc((size_t)strip.n * 3 * sizeof *rod.coords);
     if (!rod.coords) abort();
-    for (int64_t k = 0; k < slab.n; k++) {
+    for (int64_t k = 0; k < strip.n; k++) {
       for (int a = 0; a < 3; a++) {
-        /* the strip's long x along `along`, its thin y on the others */
-        rod.coords[k * 3 + a] = a == along ? slab.coords[k * 2] : slab.coords[k * 2 + 1];
+        rod.coords[k * 3 + a] = a == along ? strip.coords[k * 2] : strip.coords[k * 2 + 1];
       }
     }
-    nbs_context *ctx;
-    ASSERT_OK(nbs_context_create(NULL, &ctx));
-    pair_list ref, got;
-    ASSERT_OK(detect_sorted(ctx, &rod, NBS_DIRECT, NBS_MODE_CONTACTS, &ref));
-    for (int a = 0; a < 2; a++) {
-      const nbs_algorithm algo = a == 0 ? NBS_CELLSORT : NBS_NBS;
-      const int slot = a == 0 ? 0 : 2;
-      ASSERT_OK(detect_sorted(ctx, &rod, algo, NBS_MODE_CONTACTS, &got));
-      CHECK_MSG(same_bytes(&got, &ref), "rod along %d: %s's contacts differ", along,
-                nbs_algorithm_name(algo));
-      CHECK_MSG(ctx->axes[slot] == along, "rod along %d: %s's slot %d took axis %d", along,
-                nbs_algorithm_name(algo), slot, ctx->axes[slot]);
-      pair_list_free(&got);
-    }
-    pair_list_free(&ref);
-    nbs_context_destroy(ctx);
+    char what[64];
+    snprintf(what, sizeof what, "rod along %d", along);
+    int8_t axes[2][3];
+    took_axes(&rod, what, axes);
+    CHECK_MSG(axes[0][0] == along, "%s: cellsort's rows along axis %d", what, axes[0][0]);
+    CHECK_MSG(axes[1][2] == along, "%s: nbs's z-lists along axis %d", what, axes[1][2]);
     free(rod.coords);
   }
-  scene_free(&slab);
+  scene_free(&strip);
 }
 
 /* The hash itself, on known bytes, so that a broken hash cannot pass for a stable one. */
