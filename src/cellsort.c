@@ -21,10 +21,10 @@
  *      and the two merged (nbs__cs_core);
  *   3. gather the coordinates (and radii) in cell order, prefetching both ends of the
  *      element 256 places ahead into L2 and 32 ahead into L1 (nbs__cs_prefetch): the last
- *      random access. Where the input is larger than
- *      the last-level cache (32 MiB), steps 1-3 are instead one partition by the top digit
- *      that carries the coordinates along in whole lines, then each bucket put in order in
- *      cache (nbs__cs_partition: N = 1e7, 3D 40.9 -> 39.2 ns per element, 2D 25.1 -> 22.6).
+ *      random access. Where the input is larger than 1 GiB (3D N = 4.5e7, 2D 6.7e7),
+ *      steps 1-3 are instead one partition by the top digit that carries the coordinates
+ *      along in whole lines, then each bucket put in order in cache (nbs__cs_partition:
+ *      N = 1e8, 3D 67.1 -> 62.2 ns per element, 2D 35.2 -> 30.6).
  *      Tried and left out: the gather deferred into the sweep, each block gathering the
  *      places it is about to read (and, with threads, each thread first the places the next
  *      one reads before its range), so that the kernel's work would hide the gather's waits
@@ -803,18 +803,23 @@ int nbs__cellsort_simd(void) {
 }
 
 /* The input's size (bytes of coordinates and radii) above which cellsort sorts by the
- * partition (nbs__cs_partition) instead of gathering: 32 MiB, about the last-level cache of
- * a server processor (below it the gather's random reads find the input there; the
- * partition lost at N = 5e5 in 3D, 12 MB, and was even at 1e6, 24 MB: see
- * nbs__cs_partition). A constant, not the machine's cache size, so that the path, and so
- * the time, does not depend on what the C library reports (glibc's sysconf gave 320 MiB of
- * L3 on the benchmark machine, which has 32). The environment variable NBS_PARTITION, read
- * when a context is created, says "always" or "never" instead, for tests and comparisons. */
+ * partition (nbs__cs_partition) instead of gathering: 1 GiB. It was 32 MiB, about the
+ * last-level cache of a server processor, until the gather's prefetches went in two stages
+ * (nbs__cs_prefetch); since then the gather wins up to hundreds of MB, and the partition
+ * only beyond (interleaved, ns per element, one thread, random order, partition against
+ * gather: 3D N = 1e6, 24 MB, 37.9 against 32.5; 1e7, 240 MB, 39.0 / 35.5, two threads 20.9
+ * / 19.0, sorted order 37.8 / 32.7; 2e7 43.3 / 41.3; 3e7, 720 MB, 44.0 / 44.0; 1e8, 2.4 GB,
+ * 62.2 / 67.1; 2D 1e7, 160 MB, 22.7 / 21.6; 3e7 29.4 / 26.8; 1e8, 1.6 GB, 30.6 / 35.2). Far
+ * beyond, the gather's random reads miss the TLB as well as the caches. A constant, not the
+ * machine's cache size, so that the path, and so the time, does not depend on what the C
+ * library reports (glibc's sysconf gave 320 MiB of L3 on the benchmark machine, which has
+ * 32). The environment variable NBS_PARTITION, read when a context is created, says
+ * "always" or "never" instead, for tests and comparisons. */
 size_t nbs__cellsort_partition_min(void) {
   const char *e = getenv("NBS_PARTITION");
   if (e && strcmp(e, "always") == 0) return 0;
   if (e && strcmp(e, "never") == 0) return SIZE_MAX;
-  return (size_t)32 << 20;
+  return (size_t)1 << 30;
 }
 
 /* Offers the block [c0, c0 + lanes) against its ranges into the sink: in one call of the
@@ -1851,7 +1856,7 @@ static void nbs__cs_part_bucket(const nbs__cs_dst *d, uint32_t s0, int32_t len, 
   }
 }
 
-/* Steps 1-3 at once, for packed keys, where the input is larger than the last-level cache
+/* Steps 1-3 at once, for packed keys, where the input is larger than 1 GiB
  * (nbs__cellsort_partition_min): the keys' top digit counted (a pass over the input, in
  * order, computing each key), each element's word and coordinates (and radius) moved to its
  * top digit's bucket (a second such pass, nbs__cs_part_scatter), and each bucket put in
@@ -1872,7 +1877,9 @@ static void nbs__cs_part_bucket(const nbs__cs_dst *d, uint32_t s0, int32_t len, 
  * The buckets' pass waits on memory too (it reads back what the scatter wrote past the
  * caches), and it is why the gain is not larger. Below the threshold it loses: N = 5e5 in
  * 3D (12 MB) 33.7 -> 36.7, 2D 3e5 16.2 -> 21.7; at 1e6, about even (3D 39.2 -> 38.0, 2D
- * 22.7 -> 22.0, two threads 19.3 -> 19.7 and 11.2 -> 11.3, min of 3).
+ * 22.7 -> 22.0, two threads 19.3 -> 19.7 and 11.2 -> 11.3, min of 3). Those figures are
+ * from before the gather's two-stage prefetches, which made it lose up to hundreds of MB
+ * (see nbs__cellsort_partition_min, which now sets the threshold at 1 GiB).
  * spare (spare_bytes of it): the idx array, unused by packed keys: each thread's line
  * buffers (a line per bucket and array: 160 kB for 512 buckets in 3D with radii), then its
  * scratch for a bucket (16 bytes per element of the largest). Returns false, having written
@@ -1980,7 +1987,7 @@ static void nbs__cs_sort_gather(const nbs__cs *c, const nbs__run *run, const nbs
   const bool odd = dg.passes % 2 == 1;
   uint64_t *k0 = odd ? tk : c->key, *k1 = odd ? c->key : tk;
   int32_t *i0 = odd ? ti : c->idx, *i1 = odd ? c->idx : ti;
-  /* 1-3 at once, where the input is larger than the last-level cache */
+  /* 1-3 at once, where the input is larger than 1 GiB */
   const size_t input = nn * (size_t)(dim + (c->rs ? 1 : 0)) * sizeof(double);
   run->ctx->cs_partitioned =
       packed && input > run->ctx->cs_part_min &&

@@ -320,7 +320,7 @@ static void test_thread_counts(void) {
 
 /* The partition: cellsort's sort by the top digit with the coordinates carried along
  * (NBS_PARTITION=always, read when a context is created; by default only inputs larger than
- * 32 MiB take it) gives the bytes of the sort and the gather (NBS_PARTITION=never), in
+ * 1 GiB take it) gives the bytes of the sort and the gather (NBS_PARTITION=never), in
  * order, in both modes, for 1, 2 and 3 threads (the most 60000 elements get), from scratch
  * and again from the order it left (the time-step start). The scenes: uniform (in 2D with
  * a sparse part, whose buckets hold an element or two) and quantized (exact ties, which the
