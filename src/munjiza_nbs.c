@@ -52,13 +52,13 @@
  *    a list is a cache miss; walked side by side the misses overlap. The rows of steps 6-7
  *    link entries of the block, which at N = 1e7 (3 MB) is larger than the core's cache;
  *    walked one after the other every step waited on the one before;
- *  - a layer's z-list (2D: a row's y-list) is kept as w lists (nbs__nbs_zways: 8 where
- *    their heads stay within N / 64 ints, fewer where there are many layers), element k on
- *    list k mod w, so that steps 3 and 4 walk 8 lists side by side where the book's one
- *    list would be walked a cache miss at a time. The layer's elements are the union of its
- *    lists; only the order in which the y-lists receive them changes, and with it the order
- *    of the pairs (which this and the chains and gathered candidates below make differ from
- *    the book's plain rendering, the same from run to run);
+ *  - a layer's z-list (2D: a row's y-list) is kept as w lists (nbs__nbs_zways: 8 in 3D, 32
+ *    in 2D, where their heads stay within N / 64 ints, fewer where there are many layers),
+ *    element k on list k mod w, so that steps 3 and 4 walk w lists side by side where the
+ *    book's one list would be walked a cache miss at a time. The layer's elements are the
+ *    union of its lists; only the order in which the y-lists receive them changes, and with
+ *    it the order of the pairs (which this and the chains and gathered candidates below
+ *    make differ from the book's plain rendering, the same from run to run);
  *  - 3D: the layer block. Steps 3 and 4 copy each element they meet (coordinates, radius,
  *    number) into the next entry of a block that holds the central layer and the layer
  *    below it, and the y- and x-lists link entries of the block instead of elements
@@ -194,17 +194,17 @@
  * in 3D, and in 2D
  *   [ B: w(ny+2) ] [ A0: nx+2 ] [ A1: nx+2 ] [ CN: ny+2 ] [ RC: ny+1 ] [ RA0: nx+1 ]
  *   [ RA1: nx+1 ] [ Y: N ]
- * that is 4 (N + (w + 2) nz + 4ny + 4nx + 15 + 2w) bytes in 3D (w = nbs__nbs_zways(nz, N)) and 4 (N
- * + (w + 2) ny + 4nx + 9 + 2w) in 2D (w = nbs__nbs_zways(ny, N)): eqs. 3.80 and 3.65 without the
- * links the block holds, the records, the counts and the padding (a record has one spare entry,
- * written and not counted by a push that starts no list). nx, ny, nz, N here are the capacities
- * ctx->work_cap[0], [1], [2], [3]: exactly the lists per axis (the grid's cells, or fewer on a
- * folded axis) and N of the first detection, grown later only when a detection needs more (axes
- * then get 1/8 slack, within the cell budget). work_cap[2] is 0 for the 2D layout (a 3D grid always
- * has nz >= 1), which is how the dimension is encoded. The layer block is its own allocation
- * (ctx->nbs_block), of exactly M entries and the sentinel the first time and grown with 1/8 slack
- * when a later detection needs more; nothing in it outlives a detection but the sentinel, which is
- * written at every detection.
+ * that is 4 (N + (w + 2) nz + 4ny + 4nx + 15 + 2w) bytes in 3D (w = nbs__nbs_zways(3, nz, N)) and
+ * 4 (N + (w + 2) ny + 4nx + 9 + 2w) in 2D (w = nbs__nbs_zways(2, ny, N)): eqs. 3.80 and 3.65
+ * without the links the block holds, the records, the counts and the padding (a record has one
+ * spare entry, written and not counted by a push that starts no list). nx, ny, nz, N here are the
+ * capacities ctx->work_cap[0], [1], [2], [3]: exactly the lists per axis (the grid's cells, or
+ * fewer on a folded axis) and N of the first detection, grown later only when a detection needs
+ * more (axes then get 1/8 slack, within the cell budget). work_cap[2] is 0 for the 2D layout (a 3D
+ * grid always has nz >= 1), which is how the dimension is encoded. The layer block is its own
+ * allocation (ctx->nbs_block), of exactly M entries and the sentinel the first time and grown with
+ * 1/8 slack when a later detection needs more; nothing in it outlives a detection but the
+ * sentinel, which is written at every detection.
  * All heads are contiguous at the start, and between detections every head is NBS__EMPTY
  * and every count 0 (the book's step 0, done once when the layout is created); the next
  * arrays, the records and the block need no initialisation because an entry is always
@@ -229,12 +229,15 @@
 
 /* ---- the work-block layout ----------------------------------------------------------- */
 
-/* The most lists a layer's z-list is kept as (see nbs__nbs_zways). */
-#define NBS__NBS_ZWAYS 8
+/* The most lists a layer's z-list (2D: a row's y-list) is kept as (see nbs__nbs_zways):
+ * 8 in 3D, 32 in 2D. Beyond 8, the walks' prefetches go into L2 (NBS__NBS_PREFETCH). */
+#define NBS__NBS_ZWAYS 32
+#define NBS__NBS_ZWAYS_3D 8
+#define NBS__NBS_ZWAYS_L1 8
 
-int nbs__nbs_zways(int64_t nz, int64_t n) {
-  int w = NBS__NBS_ZWAYS;
-  while (w > 1 && (int64_t)w * (nz + 2) > n / 64) w /= 2;
+int nbs__nbs_zways(int dim, int64_t nl, int64_t n) {
+  int w = dim == 2 ? NBS__NBS_ZWAYS : NBS__NBS_ZWAYS_3D;
+  while (w > 1 && (int64_t)w * (nl + 2) > n / 64) w /= 2;
   return w;
 }
 
@@ -259,7 +262,7 @@ static int64_t nbs__nbs_head_count(int dim, const int64_t cap[4]) {
   int64_t h = 2 * (cap[0] + 2); /* A[2][nx] */
   if (dim == 3) h += 2 * (cap[1] + 2); /* B[2][ny] */
   /* C[nz][w] in 3D, B[ny][w] in 2D: the lists of the elements */
-  h += nbs__nbs_zways(cap[dim - 1], cap[3]) * (cap[dim - 1] + 2);
+  h += nbs__nbs_zways(dim, cap[dim - 1], cap[3]) * (cap[dim - 1] + 2);
   return h;
 }
 
@@ -294,7 +297,7 @@ static void nbs__nbs_layout_at(nbs__nbs_layout *L, void *work, int dim, const in
   int32_t *w = work;
   const int64_t nl = cap[dim - 1]; /* the lists of the elements: layers (3D), rows (2D) */
   L->bytes = (size_t)nbs__nbs_layout_bytes(dim, cap);
-  L->zways = nbs__nbs_zways(nl, cap[3]);
+  L->zways = nbs__nbs_zways(dim, nl, cap[3]);
   if (dim == 3) {
     L->C = w;
     w += L->zways * (nl + 2);
@@ -656,11 +659,24 @@ static inline nbs_status nbs__nbs_check_at(nbs__run *run, const nbs__nbs_axes *g
 /* Asks for the link (in `links`) and the coordinates (dim in x) of element k, the next of a
  * walk of the elements' lists, while the walk takes the one before it: the walks of steps
  * 3-4 miss the cache at every element in random order, and the processor alone overlaps
- * few of them (k may be NBS__EMPTY: a prefetch never faults). */
-#define NBS__NBS_PREFETCH(links, x, dim, k)                                                   \
+ * few of them (k may be NBS__EMPTY: a prefetch never faults). Into L1, or, where more than
+ * NBS__NBS_ZWAYS_L1 walks go side by side (2D, N of millions: up to 64 walks, two asks
+ * each), into L2 (locality 1): a prefetch into L1 holds one of the core's few L1 miss
+ * buffers until memory answers, and those, not the walks, then bound the misses in flight.
+ * Measured (2D, interleaved, min of 3, ns per element): N = 1e7 67.1 -> 57.2 with 32 lists
+ * and L2 (65.7 with 32 lists into L1, 59.5 with 16 into L2, 68.4 with 8 into L2); 4e6 64.8
+ * -> 57.7. With 8 lists or fewer, L2 only cost (2D N = 1e4, 1 list: 30.2 -> 31.4; 3D 1e6,
+ * 8: 101.5 -> 104.5); 3D with 32 lists into L2 gained nothing (1e7 127.1 -> 125.5, 1e6
+ * 101.5 -> 103.7: its walks are not the larger part of a layer's work). */
+#define NBS__NBS_PREFETCH(links, x, dim, k, l2)                                               \
   do {                                                                                        \
-    __builtin_prefetch((links) + (k));                                                        \
-    __builtin_prefetch((x) + (ptrdiff_t)(k) * (dim));                                         \
+    if (l2) {                                                                                 \
+      __builtin_prefetch((links) + (k), 0, 1);                                                \
+      __builtin_prefetch((x) + (ptrdiff_t)(k) * (dim), 0, 1);                                 \
+    } else {                                                                                  \
+      __builtin_prefetch((links) + (k));                                                      \
+      __builtin_prefetch((x) + (ptrdiff_t)(k) * (dim));                                       \
+    }                                                                                         \
   } while (0)
 
 /* Empties the heads H[R[0..top-1]] that a set's lists were started at. */
@@ -822,12 +838,14 @@ nbs__nbs_take(const nbs__run *run, const nbs__nbs_axes *g, const nbs__nbs_block 
 }
 
 /* One step of a walk of an elements' list (linked by Z), at element *e: asks for the next
- * one (NBS__NBS_PREFETCH), takes *e into entry l (nbs__nbs_take) and moves *e on. */
+ * one (NBS__NBS_PREFETCH, into L2 where l2), takes *e into entry l (nbs__nbs_take) and
+ * moves *e on. */
 static inline __attribute__((always_inline)) void
 nbs__nbs_step(const nbs__run *run, const nbs__nbs_axes *g, const nbs__nbs_block *K, int dim,
-              const int32_t *Z, int32_t *e, int32_t l, int32_t *H, int32_t *R, int32_t *top) {
+              bool l2, const int32_t *Z, int32_t *e, int32_t l, int32_t *H, int32_t *R,
+              int32_t *top) {
   const int32_t next = Z[*e];
-  NBS__NBS_PREFETCH(Z, run->x, dim, next);
+  NBS__NBS_PREFETCH(Z, run->x, dim, next, l2);
   nbs__nbs_take(run, g, K, dim, *e, l, H, R, top);
   *e = next;
 }
@@ -876,6 +894,7 @@ nbs__nbs_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bool 
   int32_t *restrict C = dim == 3 ? L->C : L->B0;
   int32_t *restrict Z = dim == 3 ? L->Z : L->Y;
   const int32_t ways = L->zways;
+  const bool l2 = ways > NBS__NBS_ZWAYS_L1; /* the walks' prefetches into L2 */
   int32_t *restrict CN = L->CN;
   int32_t *restrict RC = L->RC;
   int32_t *H0 = dim == 3 ? L->B0 : L->A0, *H1 = dim == 3 ? L->B1 : L->A1;
@@ -933,11 +952,11 @@ nbs__nbs_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bool 
       more = false;
       for (int w = 0; w < ways; w++) {
         if (e[w] != NBS__EMPTY) {
-          nbs__nbs_step(run, g, &K, dim, Z, &e[w], m++, H0, R0, &n0);
+          nbs__nbs_step(run, g, &K, dim, l2, Z, &e[w], m++, H0, R0, &n0);
           more = true;
         }
         if (u[w] != NBS__EMPTY) {
-          nbs__nbs_step(run, g, &K, dim, Z, &u[w], mu--, H1, R1, &n1);
+          nbs__nbs_step(run, g, &K, dim, l2, Z, &u[w], mu--, H1, R1, &n1);
           more = true;
         }
       }
@@ -969,7 +988,7 @@ nbs__nbs_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bool 
         more = false;
         for (int w = 0; w < ways; w++) {
           if (e[w] != NBS__EMPTY) {
-            nbs__nbs_step(run, g, &K, dim, Z, &e[w], m, H0, R0, &n0);
+            nbs__nbs_step(run, g, &K, dim, l2, Z, &e[w], m, H0, R0, &n0);
             m = m + 1 == cap ? 0 : m + 1;
             len++;
             more = true;

@@ -519,6 +519,62 @@ static void test_core(void) {
   scene_free(&s);
 }
 
+/* NBS's lists of the elements kept as many lists walked side by side (nbs__nbs_zways): as
+ * many as 32 per row in 2D, whose walks then prefetch into L2, and 8 per layer in 3D. A
+ * uniform scene takes more than 8 only from N of millions, so these scenes crowd many
+ * elements into few cells: 2D, 70000 points of radius 0.02 and one of 0.5 (the cells' edge,
+ * 1) in a square of side 28, and 66000 of diameter 1 in one of side 60 (16 lists: crowded
+ * cells of equal elements touch a hundred each at 32); 3D, 40000 points of radius 0.1 and
+ * one of 0.5 in a cube of side 10. The lists each scene's NBS takes are checked, and its contacts against screening's
+ * and cellsort's (both checked against direct above). */
+static void test_nbs_ways(void) {
+  static const struct {
+    int dim;
+    int64_t n;
+    double side;
+    double r; /* the points' radius, or 0: all of diameter 1 */
+    int64_t ways;
+  } wc[] = {{2, 70000, 28.0, 0.02, 32}, {2, 66000, 60.0, 0.0, 16}, {3, 40000, 10.0, 0.1, 8}};
+  for (size_t c = 0; c < sizeof wc / sizeof *wc; c++) {
+    const int dim = wc[c].dim;
+    scene s;
+    memset(&s, 0, sizeof s);
+    s.dim = dim;
+    s.n = wc[c].n;
+    s.diameter = 1.0;
+    s.coords = malloc((size_t)s.n * (size_t)dim * sizeof *s.coords);
+    s.radii = wc[c].r > 0 ? malloc((size_t)s.n * sizeof *s.radii) : NULL;
+    ASSERT_TRUE(s.coords != NULL && (wc[c].r == 0 || s.radii != NULL));
+    uint64_t state = 4242 + c;
+    for (int64_t e = 0; e < s.n * dim; e++) s.coords[e] = wc[c].side * next_unit(&state);
+    if (s.radii) {
+      for (int64_t e = 0; e < s.n; e++) s.radii[e] = e == 0 ? 0.5 : wc[c].r;
+    }
+    nbs_context *ctx;
+    ASSERT_OK(nbs_context_create(NULL, &ctx));
+    nbs_stats st;
+    ASSERT_OK(detect_stats(ctx, &s, NBS_NBS, &st));
+    int at[3];
+    nbs__axis_order(dim, st.cells, dim - 1, at);
+    const int64_t ways = nbs__nbs_zways(dim, st.cells[at[dim - 1]], s.n);
+    CHECK_MSG(!st.compressed && ways == wc[c].ways, "%dD n=%lld: %lld lists, expected %lld",
+              dim, (long long)s.n, (long long)ways, (long long)wc[c].ways);
+    pair_list got, scr, cs;
+    ASSERT_OK(detect_sorted(ctx, &s, NBS_NBS, NBS_MODE_CONTACTS, &got));
+    ASSERT_OK(detect_sorted(ctx, &s, NBS_SCREENING, NBS_MODE_CONTACTS, &scr));
+    ASSERT_OK(detect_sorted(ctx, &s, NBS_CELLSORT, NBS_MODE_CONTACTS, &cs));
+    CHECK_MSG(got.count > (size_t)s.n / 10 && pair_lists_equal(&got, &scr) &&
+                  pair_lists_equal(&got, &cs),
+              "%dD n=%lld: nbs finds %zu contacts, screening %zu, cellsort %zu", dim,
+              (long long)s.n, got.count, scr.count, cs.count);
+    pair_list_free(&got);
+    pair_list_free(&scr);
+    pair_list_free(&cs);
+    nbs_context_destroy(ctx);
+    scene_free(&s);
+  }
+}
+
 int main(int argc, char **argv) {
   static const test_case tests[] = {
       {"scenes_2d", test_scenes_2d},
@@ -530,6 +586,7 @@ int main(int argc, char **argv) {
       {"bucket_scratch", test_bucket_scratch},
       {"core", test_core},
       {"short_rows", test_short_rows},
+      {"nbs_ways", test_nbs_ways},
   };
   return test_main(argc, argv, tests, sizeof tests / sizeof *tests);
 }

@@ -471,7 +471,7 @@ static nbs_status fz_expected(const fz_run *R, nbs_algorithm algo) {
     }
     m[d - 1] = l[top];
     const int64_t nl = m[d - 1];
-    const int64_t w = nbs__nbs_zways(nl, s->n);
+    const int64_t w = nbs__nbs_zways(d, nl, s->n);
     int64_t heads = 2 * (m[0] + 2) + (d == 3 ? 2 * (m[1] + 2) : 0) + w * (nl + 2);
     int64_t counts = nl + 2;
     int64_t records = 2 * (m[0] + 1) + nl + 1 + (d == 3 ? 2 * (m[1] + 1) : 0);
