@@ -20,7 +20,8 @@
  *      a few elements far out widen the keys), the core is sorted so and the others apart,
  *      and the two merged (nbs__cs_core);
  *   3. gather the coordinates (and radii) in cell order, prefetching both ends of the
- *      element 256 places ahead into L2 and 32 ahead into L1 (nbs__cs_prefetch): the last
+ *      element 256 places ahead into L2 and 32 ahead into L1 (nbs__cs_prefetch) where the
+ *      input is over 8 MiB (NBS__CS_PREFETCH_MIN; below, the prefetches only cost): the last
  *      random access. Where the input is larger than 1 GiB (3D N = 4.5e7, 2D 6.7e7),
  *      steps 1-3 are instead one partition by the top digit that carries the coordinates
  *      along in whole lines, then each bucket put in order in cache (nbs__cs_partition:
@@ -145,6 +146,14 @@
  * distance, bounded the random reads (see nbs__cs_prefetch). */
 #define NBS__CS_AHEAD 256
 #define NBS__CS_NEAR 32
+/* The input's size (bytes of coordinates and radii) above which the gather and the warm
+ * pass prefetch at all. Below it the input is in the caches by the time it is read, and
+ * the prefetches, with the reads of the words ahead that name their elements, only cost
+ * (interleaved, min of 4, ns per element, one thread, random order, prefetching against
+ * not: 3D N = 1e4, 240 kB, 25.6 / 23.3; 1e5, 2.4 MB, 29.5 / 27.6; 3e5, 7.2 MB, 31.1 / 30.3;
+ * 5e5, 12 MB, 33.4 / 34.2; 1e6 34.1 / 37.5; 2D 1e4 14.1 / 12.0; 7e5, 11.2 MB, 19.7 / 18.8;
+ * 1e6, 16 MB, 20.1 / 20.4). */
+#define NBS__CS_PREFETCH_MIN ((size_t)8 << 20)
 /* How far ahead the sweep asks for its own rows' keys and coordinates (see the sweep). */
 #define NBS__CS_SWEEP_AHEAD 64
 /* Entries after the end of the key array, read by NBS__CS_ADVANCE: the keys it compares at
@@ -1287,7 +1296,8 @@ static int32_t nbs__cs_thread_start(const nbs__cs *c, int32_t p) {
  * quarter of the elements straddle two lines), and their radii. Measured (one thread,
  * random order, interleaved, min of 4, ns per element) against one prefetch into L1 128
  * places ahead: N = 1e6 3D 37.5 -> 32.7, 2D 21.2 -> 18.8, two threads 3D 19.4 -> 18.0,
- * sparse 46.4 -> 41.4; N = 1e4, where nothing waits on memory, 24.5 -> 25.5; time steps
+ * sparse 46.4 -> 41.4; N = 1e4, where nothing waits on memory, 24.5 -> 25.5 (since then
+ * inputs of at most NBS__CS_PREFETCH_MIN are gathered without prefetches); time steps
  * (the warm pass, whose input the step has just written) the same, 32.3 and 32.8. A
  * random gather alone (1e6 elements of 24 bytes, a test program) went from 9.1 to 4.5 ns
  * per element; distances 128-512 and 16-48 were all within noise.
@@ -1455,6 +1465,8 @@ static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
   uint64_t *key = c->key;
   double *xs = c->xs, *ys = c->ys, *zs = c->zs, *rs = c->rs;
   const double *x = run->x, *r = run->r;
+  const bool ask = (size_t)n * (size_t)(dim + (rs ? 1 : 0)) * sizeof(double) >
+                   NBS__CS_PREFETCH_MIN; /* see the gather */
   /* zeroed for GCC 12, which without OpenMP takes kept[0] for unset after the pass */
   int32_t kept[NBS__THREADS_MAX] = {0};
   int64_t out[NBS__THREADS_MAX];
@@ -1471,10 +1483,12 @@ static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
     for (int32_t p = from; p < to; p++) {
       /* the gather's prefetch; key[pa] is still the last order's word, within this thread's
        * part (the next thread's rewrites its own) */
-      const int32_t pa = p + NBS__CS_AHEAD < to ? p + NBS__CS_AHEAD : p;
-      const int32_t pn = p + NBS__CS_NEAR < to ? p + NBS__CS_NEAR : p;
-      nbs__cs_prefetch(x, rs ? r : NULL, dim, (int32_t)(key[pa] & emask),
-                       (int32_t)(key[pn] & emask));
+      if (ask) {
+        const int32_t pa = p + NBS__CS_AHEAD < to ? p + NBS__CS_AHEAD : p;
+        const int32_t pn = p + NBS__CS_NEAR < to ? p + NBS__CS_NEAR : p;
+        nbs__cs_prefetch(x, rs ? r : NULL, dim, (int32_t)(key[pa] & emask),
+                         (int32_t)(key[pn] & emask));
+      }
       const uint64_t old = key[p];
       const int32_t e = (int32_t)(old & emask);
       const double *xk = x + (size_t)e * (size_t)dim;
@@ -1983,7 +1997,6 @@ static void nbs__cs_sort_gather(const nbs__cs *c, const nbs__run *run, const nbs
    * skipped). */
   uint64_t *tk = (uint64_t *)(void *)c->xs;
   int32_t *ti = packed ? NULL : (int32_t *)(void *)(c->xs + nn);
-  const uint64_t emask = c->imask;
   const bool odd = dg.passes % 2 == 1;
   uint64_t *k0 = odd ? tk : c->key, *k1 = odd ? c->key : tk;
   int32_t *i0 = odd ? ti : c->idx, *i1 = odd ? c->idx : ti;
@@ -2013,7 +2026,19 @@ static void nbs__cs_sort_gather(const nbs__cs *c, const nbs__run *run, const nbs
     nbs__radix(k0, i0, k1, i1, c->key, c->idx, n, c->ks, dg, hist, threads,
                (uint64_t *)(void *)c->ys, nn * (size_t)(dim - 1));
   }
-  /* 3. gather */
+  /* 3. gather; where the input is small, in a loop of its own without the prefetches (a
+   * branch on it in the one loop, or a function inlined twice with it a constant, which
+   * OpenMP outlines once, took 24.0-24.3 ns per element against 23.3 at 3D N = 1e4) */
+  const uint64_t emask = c->imask;
+  if (input <= NBS__CS_PREFETCH_MIN) {
+#if defined(_OPENMP)
+#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
+#endif
+    for (int32_t p = 0; p < n; p++) {
+      nbs__cs_take(c, run, p, packed ? (int32_t)(c->key[p] & emask) : c->idx[p]);
+    }
+    return;
+  }
 #if defined(_OPENMP)
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
 #endif
