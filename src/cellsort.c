@@ -1335,6 +1335,12 @@ static inline uint64_t nbs__cs_cellkey(const nbs__cs_keying *kg, const double *x
   return iz << kg->sz | iy << kg->sy | ix;
 }
 
+/* The bytes of the input's coordinates and radii, which choose the gather's path
+ * (NBS__CS_PREFETCH_MIN, nbs__cellsort_partition_min). */
+static size_t nbs__cs_input_bytes(const nbs__cs *c) {
+  return (size_t)c->n * (size_t)(c->dim + (c->rs ? 1 : 0)) * sizeof(double);
+}
+
 /* Place p of the cell order takes element e's coordinates (and radius) from the input: the
  * gather and the time-step merge (the time-step pass writes the same through locals). */
 static inline void nbs__cs_take(const nbs__cs *c, const nbs__run *run, int32_t p, int32_t e) {
@@ -1465,8 +1471,7 @@ static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
   uint64_t *key = c->key;
   double *xs = c->xs, *ys = c->ys, *zs = c->zs, *rs = c->rs;
   const double *x = run->x, *r = run->r;
-  const bool ask = (size_t)n * (size_t)(dim + (rs ? 1 : 0)) * sizeof(double) >
-                   NBS__CS_PREFETCH_MIN; /* see the gather */
+  const bool ask = nbs__cs_input_bytes(c) > NBS__CS_PREFETCH_MIN; /* see the gather */
   /* zeroed for GCC 12, which without OpenMP takes kept[0] for unset after the pass */
   int32_t kept[NBS__THREADS_MAX] = {0};
   int64_t out[NBS__THREADS_MAX];
@@ -2001,7 +2006,7 @@ static void nbs__cs_sort_gather(const nbs__cs *c, const nbs__run *run, const nbs
   uint64_t *k0 = odd ? tk : c->key, *k1 = odd ? c->key : tk;
   int32_t *i0 = odd ? ti : c->idx, *i1 = odd ? c->idx : ti;
   /* 1-3 at once, where the input is larger than 1 GiB */
-  const size_t input = nn * (size_t)(dim + (c->rs ? 1 : 0)) * sizeof(double);
+  const size_t input = nbs__cs_input_bytes(c);
   run->ctx->cs_partitioned =
       packed && input > run->ctx->cs_part_min &&
       nbs__cs_partition(c, run, kg, eb, dg, hist, threads, spare, spare_bytes);
@@ -2009,34 +2014,22 @@ static void nbs__cs_sort_gather(const nbs__cs *c, const nbs__run *run, const nbs
   /* 1-2 by the crowded core's keys, where they fit a word with the element and the whole
    * keys do not; else: */
   if (packed || !nbs__cs_core(c, run, kg, eb, bits, hist, threads)) {
-    /* 1. keys; packed, in a loop for each dimension with it a constant and the grid in
-     * locals (3D N = 1e6 34.1 -> 33.5 ns per element with the gather's below): OpenMP
-     * outlines a loop before inlining, so it must be written out for each */
+    /* 1. keys (the grid in locals; with the small inputs' gather's locals below, 3D N = 1e6
+     * 33.8 -> 33.5 ns per element, 1e4 23.2 -> 23.0-23.2, 2D 1e4 11.8 -> 11.4, interleaved,
+     * min of 4-6; the same loops written out for each dimension, with it a constant, were
+     * no faster, 33.3 / 33.5 and 22.95 / 23.15) */
     const nbs__grid g = *kg->g;
     nbs__cs_keying kl = *kg;
     kl.g = &g;
-    if (packed && dim == 3) {
-      kl.dim = 3;
 #if defined(_OPENMP)
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
 #endif
-      for (int32_t k = 0; k < n; k++) {
-        k0[k] = nbs__cs_cellkey(&kl, x + (size_t)k * 3) << eb | (uint64_t)k;
-      }
-    } else if (packed) {
-      kl.dim = 2;
-#if defined(_OPENMP)
-#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
-#endif
-      for (int32_t k = 0; k < n; k++) {
-        k0[k] = nbs__cs_cellkey(&kl, x + (size_t)k * 2) << eb | (uint64_t)k;
-      }
-    } else {
-#if defined(_OPENMP)
-#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
-#endif
-      for (int32_t k = 0; k < n; k++) {
-        k0[k] = nbs__cs_cellkey(&kl, x + (size_t)k * (size_t)dim);
+    for (int32_t k = 0; k < n; k++) {
+      const uint64_t w = nbs__cs_cellkey(&kl, x + (size_t)k * (size_t)dim);
+      if (packed) {
+        k0[k] = w << eb | (uint64_t)k;
+      } else {
+        k0[k] = w;
         i0[k] = k;
       }
     }
@@ -2049,38 +2042,21 @@ static void nbs__cs_sort_gather(const nbs__cs *c, const nbs__run *run, const nbs
    * branch on it in the one loop, or a function inlined twice with it a constant, which
    * OpenMP outlines once, took 24.0-24.3 ns per element against 23.3 at 3D N = 1e4) */
   const uint64_t emask = c->imask;
-  if (input <= NBS__CS_PREFETCH_MIN && packed && !c->rs) {
-    /* packed words without radii (every uniform scene), the dimension a constant */
-    double *restrict xs = c->xs, *restrict ys = c->ys, *restrict zs = c->zs;
-    const uint64_t *restrict key = c->key;
-    if (dim == 3) {
-#if defined(_OPENMP)
-#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
-#endif
-      for (int32_t p = 0; p < n; p++) {
-        const double *xk = x + (size_t)(key[p] & emask) * 3;
-        xs[p] = xk[0];
-        ys[p] = xk[1];
-        zs[p] = xk[2];
-      }
-    } else {
-#if defined(_OPENMP)
-#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
-#endif
-      for (int32_t p = 0; p < n; p++) {
-        const double *xk = x + (size_t)(key[p] & emask) * 2;
-        xs[p] = xk[0];
-        ys[p] = xk[1];
-      }
-    }
-    return;
-  }
   if (input <= NBS__CS_PREFETCH_MIN) {
+    double *restrict xs = c->xs, *restrict ys = c->ys, *restrict zs = c->zs;
+    double *restrict rs = c->rs;
+    const uint64_t *restrict key = c->key;
+    const double *r = run->r;
 #if defined(_OPENMP)
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
 #endif
     for (int32_t p = 0; p < n; p++) {
-      nbs__cs_take(c, run, p, packed ? (int32_t)(c->key[p] & emask) : c->idx[p]);
+      const int32_t e = packed ? (int32_t)(key[p] & emask) : c->idx[p];
+      const double *xk = x + (size_t)e * (size_t)dim;
+      xs[p] = xk[0];
+      ys[p] = xk[1];
+      if (dim == 3) zs[p] = xk[2];
+      if (rs) rs[p] = r[e];
     }
     return;
   }
