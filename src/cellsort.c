@@ -366,7 +366,10 @@ static void nbs__radix_local(uint64_t *a, uint64_t *out, uint64_t *other, int32_
  * key pass 1.2 -> 3.1 ns per element, sort 3.2 -> 2.8); and, to save passes where the
  * domain is huge, sorting the row bits only, then each row by insertion, or by a small LSD
  * when it is long (2D huge domain, N = 1e6, 23.6 -> 25.5 ns per element: the insertion's
- * branches cost more than the two passes). */
+ * branches cost more than the two passes); and the top digit always 9 bits wide, the bits
+ * below it split evenly (3D N = 1e6, 24 bits: 512 buckets of about 2,000 keys, in L1,
+ * instead of 256 of 3,900; 2D 25 bits: 512 instead of 128 buckets, whose 7,800 keys do not
+ * fit L1): no faster (interleaved, min of 6, 33.2 / 33.3 and 19.6 / 19.5). */
 static void nbs__radix(uint64_t *sk, int32_t *si, uint64_t *dk, int32_t *di, uint64_t *out_k,
                        int32_t *out_i, int32_t n, int low, nbs__digits dg, uint32_t *hist,
                        int threads, uint64_t *scratch, size_t scratch_words) {
@@ -564,7 +567,17 @@ static size_t nbs__cs_block_generic(const nbs__cs *c, int32_t c0, int lanes,
  * same time (33.2 / 33.2), and the compress stored to memory directly: slower (35.1
  * against 33.4). Where the kernel's time goes, measured by leaving parts out (3D, N = 1e6,
  * detection 34 ns): the steps over the ranges about 12 ns, of which the loops alone (one
- * load per q) about 5.5, the distances on top of them under 1, the pairs' output about 6. */
+ * load per q) about 5.5, the distances on top of them under 1, the pairs' output about 6.
+ * Later (interleaved, min of 6, detection in ns per element, 3D N = 1e6 then 2D): leaving
+ * q's element out of the pairs (a wrong output, to measure it) saved 1.2 (33.7 -> 31.3);
+ * each correct way to save it was slower: the pair left unordered in the steps (one blend
+ * for the min and max) and ordered by a vector pass after the ranges, 32.8 -> 33.5 and the
+ * same in 2D; q's place in the pair instead of its element, the places then turned into
+ * elements after the ranges, by a scalar loop 33.7 -> 35.1 (2D 19.9 -> 20.7), by gathers
+ * 33.6 -> 35.1 (19.1 -> 20.7). The sums moved from the adders to the multipliers as
+ * fma(a, 1, b), which rounds as a + b does: 33.4 -> 34.0, and the z difference with them
+ * 34.8: the adders are not what bounds the steps. The kernel called directly from the sweep
+ * compiled for it (a constant, inlined, not a pointer): 33.2 / 33.4. */
 static inline __attribute__((always_inline)) NBS__CS_AVX512_TARGET size_t
 nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int32_t c0,
                       int lanes, const nbs__cs_ranges *rg, nbs_pair *out) {
