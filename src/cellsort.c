@@ -283,8 +283,7 @@ static bool nbs__radix_pass(const uint64_t *sk, const int32_t *si, uint64_t *dk,
 #if defined(_OPENMP)
 #pragma omp parallel num_threads(threads) if (threads > 1)
 #endif
-  {
-    const int t = nbs__thread_num();
+  NBS__PARTS(t, threads) {
     nbs__radix_count(sk, nbs__chunk(n, t, threads), nbs__chunk(n, t + 1, threads), shift, dg,
                      hist + (size_t)t * buckets);
   }
@@ -297,8 +296,7 @@ static bool nbs__radix_pass(const uint64_t *sk, const int32_t *si, uint64_t *dk,
 #if defined(_OPENMP)
 #pragma omp parallel num_threads(threads) if (threads > 1)
 #endif
-  {
-    const int t = nbs__thread_num();
+  NBS__PARTS(t, threads) {
     nbs__radix_scatter(sk, si, dk, di, nbs__chunk(n, t, threads),
                        nbs__chunk(n, t + 1, threads), shift, dg, hist + (size_t)t * buckets);
   }
@@ -387,8 +385,7 @@ static void nbs__radix(uint64_t *sk, int32_t *si, uint64_t *dk, int32_t *di, uin
 #if defined(_OPENMP)
 #pragma omp parallel num_threads(threads) if (threads > 1)
 #endif
-      {
-        const int t = nbs__thread_num();
+      NBS__PARTS(t, threads) {
         const uint32_t from = (uint32_t)nbs__chunk(n, t, threads);
         const uint32_t to = (uint32_t)nbs__chunk(n, t + 1, threads);
         uint32_t *h = hist + (size_t)t * dg.buckets;
@@ -1388,10 +1385,11 @@ static int32_t nbs__cs_split(const uint64_t *key, int32_t k, const uint64_t *S, 
 /* Merges the m sorted words S taken out (their coordinates read from the input) into the k
  * kept words at the start of key[] (with their coordinates), in place, from the end: place
  * p takes the larger of the last kept and the last taken out, and never overwrites a kept
- * word not yet read, since a kept word only moves up. With T threads thread t fills the
- * places [n t / T, n (t + 1) / T), whose kept words and words of S the merge path gives;
- * the kept words it reads below its first place lie in the places of threads before it,
- * so it copies them to `side` (room for `cap` elements) before any thread writes. */
+ * word not yet read, since a kept word only moves up. In T parts (one per thread asked
+ * for) part t fills the places [n t / T, n (t + 1) / T), whose kept words and words of S
+ * the merge path gives; the kept words it reads below its first place lie in the places of
+ * the parts before it, so it copies them to `side` (room for `cap` elements) before any
+ * part is written. */
 static void nbs__cs_merge(const nbs__cs *c, const nbs__run *run, int32_t k, const uint64_t *S,
                           int64_t m, uint64_t *side, int64_t cap, int threads) {
   const int32_t n = c->n;
@@ -1415,45 +1413,50 @@ static void nbs__cs_merge(const nbs__cs *c, const nbs__run *run, int32_t k, cons
 #pragma omp parallel num_threads(threads) if (threads > 1)
 #endif
   {
-    const int t = nbs__thread_num();
-    const int32_t P0 = nbs__chunk(n, t, threads), P1 = nbs__chunk(n, t + 1, threads);
-    const int32_t I0 = I[t], I1 = I[t + 1];
-    const int64_t J0 = P0 - I0, J1 = P1 - I1, o = off[t] - I0;
-    for (int32_t i = I0; i < P0 && i < I1; i++) {
-      sk[o + i] = key[i];
-      sx[o + i] = xs[i];
-      sy[o + i] = ys[i];
-      if (dim == 3) sz[o + i] = zs[i];
-      if (rs) sr[o + i] = rs[i];
+    NBS__PARTS(t, threads) {
+      const int32_t P0 = nbs__chunk(n, t, threads);
+      const int64_t o = off[t] - I[t];
+      for (int32_t i = I[t]; i < P0 && i < I[t + 1]; i++) {
+        sk[o + i] = key[i];
+        sx[o + i] = xs[i];
+        sy[o + i] = ys[i];
+        if (dim == 3) sz[o + i] = zs[i];
+        if (rs) sr[o + i] = rs[i];
+      }
     }
 #if defined(_OPENMP)
 #pragma omp barrier
 #endif
-    int32_t i = I1 - 1;
-    int64_t j = J1 - 1;
-    /* once S's words are placed, the kept words left are in place when J0 is 0 */
-    for (int32_t p = P1 - 1; p >= P0 && (j >= J0 || J0 > 0); p--) {
-      const bool low = i < P0; /* copied to side */
-      const uint64_t kw = i >= I0 ? (low ? sk[o + i] : key[i]) : 0;
-      if (i >= I0 && (j < J0 || kw > S[j])) {
-        key[p] = kw;
-        xs[p] = low ? sx[o + i] : xs[i];
-        ys[p] = low ? sy[o + i] : ys[i];
-        if (dim == 3) zs[p] = low ? sz[o + i] : zs[i];
-        if (rs) rs[p] = low ? sr[o + i] : rs[i];
-        i--;
-      } else {
-        /* the elements taken out are few and anywhere: ask for the coordinates of the one
-         * eight insertions ahead */
-        if (j >= J0 + 8) {
-          const size_t ea = (size_t)(S[j - 8] & emask) * (size_t)dim;
-          __builtin_prefetch(x + ea);
-          __builtin_prefetch(x + ea + (dim - 1));
-          if (rs) __builtin_prefetch(r + (S[j - 8] & emask));
+    NBS__PARTS(t, threads) {
+      const int32_t P0 = nbs__chunk(n, t, threads), P1 = nbs__chunk(n, t + 1, threads);
+      const int32_t I0 = I[t], I1 = I[t + 1];
+      const int64_t J0 = P0 - I0, J1 = P1 - I1, o = off[t] - I0;
+      int32_t i = I1 - 1;
+      int64_t j = J1 - 1;
+      /* once S's words are placed, the kept words left are in place when J0 is 0 */
+      for (int32_t p = P1 - 1; p >= P0 && (j >= J0 || J0 > 0); p--) {
+        const bool low = i < P0; /* copied to side */
+        const uint64_t kw = i >= I0 ? (low ? sk[o + i] : key[i]) : 0;
+        if (i >= I0 && (j < J0 || kw > S[j])) {
+          key[p] = kw;
+          xs[p] = low ? sx[o + i] : xs[i];
+          ys[p] = low ? sy[o + i] : ys[i];
+          if (dim == 3) zs[p] = low ? sz[o + i] : zs[i];
+          if (rs) rs[p] = low ? sr[o + i] : rs[i];
+          i--;
+        } else {
+          /* the elements taken out are few and anywhere: ask for the coordinates of the one
+           * eight insertions ahead */
+          if (j >= J0 + 8) {
+            const size_t ea = (size_t)(S[j - 8] & emask) * (size_t)dim;
+            __builtin_prefetch(x + ea);
+            __builtin_prefetch(x + ea + (dim - 1));
+            if (rs) __builtin_prefetch(r + (S[j - 8] & emask));
+          }
+          const uint64_t w = S[j--];
+          key[p] = w;
+          nbs__cs_take(c, run, p, (int32_t)(w & emask));
         }
-        const uint64_t w = S[j--];
-        key[p] = w;
-        nbs__cs_take(c, run, p, (int32_t)(w & emask));
       }
     }
   }
@@ -1499,8 +1502,7 @@ static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
 #if defined(_OPENMP)
 #pragma omp parallel num_threads(threads) if (threads > 1) reduction(|| : over)
 #endif
-  {
-    const int t = nbs__thread_num();
+  NBS__PARTS(t, threads) {
     const int32_t from = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
     uint64_t *mine = spare + (size_t)t * (size_t)share;
     int32_t k = from;
@@ -1531,6 +1533,7 @@ static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
     }
     kept[t] = k - from;
     out[t] = m;
+    if (over) break;
   }
   *moved = 0;
   if (over) return false;
@@ -1681,8 +1684,7 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
 #if defined(_OPENMP)
 #pragma omp parallel num_threads(threads) if (threads > 1)
 #endif
-  {
-    const int t = nbs__thread_num();
+  NBS__PARTS(t, threads) {
     const int32_t f = from[t], to = from[t + 1];
     if (dim == 3) {
       nbs__cs_core_split(kg, x, 3, f, to, lo, cw, eb, A + f, key + f, idx + f, &nc[t], &no[t]);
@@ -1950,13 +1952,14 @@ static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__
 #pragma omp parallel num_threads(threads) if (threads > 1)
 #endif
   {
-    const int t = nbs__thread_num();
-    const int32_t f = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
-    uint32_t *h = hist + (size_t)t * B;
-    if (dim == 3) {
-      nbs__cs_part_count(kg, x, 3, f, to, kshift, dmask, h);
-    } else {
-      nbs__cs_part_count(kg, x, 2, f, to, kshift, dmask, h);
+    NBS__PARTS(t, threads) {
+      const int32_t f = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
+      uint32_t *h = hist + (size_t)t * B;
+      if (dim == 3) {
+        nbs__cs_part_count(kg, x, 3, f, to, kshift, dmask, h);
+      } else {
+        nbs__cs_part_count(kg, x, 2, f, to, kshift, dmask, h);
+      }
     }
 #if defined(_OPENMP)
 #pragma omp barrier
@@ -1964,37 +1967,44 @@ static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__
 #endif
     {
       most = nbs__radix_offsets(hist, B, threads, top);
-      /* each thread's scratch for a bucket: the words' sort and the coordinates'
-       * permutation (8 bytes per entry), the elements and their ranks (4 each), on a line's
-       * boundary */
+      /* each part's scratch for a bucket: the words' sort and the coordinates' permutation
+       * (8 bytes per entry), the elements and their ranks (4 each), on a line's boundary */
       per = ((size_t)most * 16 + 63) & ~(size_t)63;
       fits = most <= NBS__RADIX_LOCAL_MAX && (size_t)threads * per <= spare_bytes;
     }
     if (fits) {
-      uint32_t start[(size_t)1 << NBS__RADIX_BITS];
-      memcpy(start, h, B * sizeof *h);
-      uint64_t *wb = (uint64_t *)(void *)(spare + (size_t)t * wc);
-      const double *r = run->r;
-      if (dim == 3 && radii) {
-        nbs__cs_part_scatter(kg, x, r, 3, true, f, to, eb, kshift, dmask, h, start, wb, &d);
-      } else if (dim == 3) {
-        nbs__cs_part_scatter(kg, x, r, 3, false, f, to, eb, kshift, dmask, h, start, wb, &d);
-      } else if (radii) {
-        nbs__cs_part_scatter(kg, x, r, 2, true, f, to, eb, kshift, dmask, h, start, wb, &d);
-      } else {
-        nbs__cs_part_scatter(kg, x, r, 2, false, f, to, eb, kshift, dmask, h, start, wb, &d);
+      NBS__PARTS(t, threads) {
+        const int32_t f = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
+        uint32_t *h = hist + (size_t)t * B;
+        uint32_t start[(size_t)1 << NBS__RADIX_BITS];
+        memcpy(start, h, B * sizeof *h);
+        uint64_t *wb = (uint64_t *)(void *)(spare + (size_t)t * wc);
+        const double *r = run->r;
+        if (dim == 3 && radii) {
+          nbs__cs_part_scatter(kg, x, r, 3, true, f, to, eb, kshift, dmask, h, start, wb, &d);
+        } else if (dim == 3) {
+          nbs__cs_part_scatter(kg, x, r, 3, false, f, to, eb, kshift, dmask, h, start, wb, &d);
+        } else if (radii) {
+          nbs__cs_part_scatter(kg, x, r, 2, true, f, to, eb, kshift, dmask, h, start, wb, &d);
+        } else {
+          nbs__cs_part_scatter(kg, x, r, 2, false, f, to, eb, kshift, dmask, h, start, wb, &d);
+        }
       }
-      /* then each thread sorts the buckets that start in its part */
+      /* then each part's buckets (those that start in it) are sorted */
 #if defined(_OPENMP)
 #pragma omp barrier
 #endif
-      const uint32_t from = (uint32_t)f, end = (uint32_t)to;
-      uint64_t *other = (uint64_t *)(void *)(spare + (size_t)t * per);
-      int32_t *gid = (int32_t *)(void *)(other + most), *rank = gid + most;
-      for (size_t b = 0; b < B; b++) {
-        if (top[b] < from || top[b] >= end || top[b + 1] == top[b]) continue;
-        nbs__cs_part_bucket(&d, top[b], (int32_t)(top[b + 1] - top[b]), eb, dg, h, other, gid,
-                            rank);
+      NBS__PARTS(t, threads) {
+        const uint32_t from = (uint32_t)nbs__chunk(n, t, threads);
+        const uint32_t end = (uint32_t)nbs__chunk(n, t + 1, threads);
+        uint32_t *h = hist + (size_t)t * B;
+        uint64_t *other = (uint64_t *)(void *)(spare + (size_t)t * per);
+        int32_t *gid = (int32_t *)(void *)(other + most), *rank = gid + most;
+        for (size_t b = 0; b < B; b++) {
+          if (top[b] < from || top[b] >= end || top[b + 1] == top[b]) continue;
+          nbs__cs_part_bucket(&d, top[b], (int32_t)(top[b + 1] - top[b]), eb, dg, h, other,
+                              gid, rank);
+        }
       }
     }
   }
@@ -2163,8 +2173,7 @@ static void nbs__cs_append(nbs_pair *dst, const nbs__sink *sinks, int threads, s
 #if defined(_OPENMP)
 #pragma omp parallel num_threads(threads)
 #endif
-  {
-    const int t = nbs__thread_num();
+  NBS__PARTS(t, threads) {
     const size_t a = more * (size_t)t / (size_t)threads;
     const size_t b = more * (size_t)(t + 1) / (size_t)threads;
     size_t at = 0; /* where source s starts in dst */
@@ -2320,8 +2329,7 @@ nbs_status nbs__cellsort(nbs__run *run) {
   } else {
 #if defined(_OPENMP)
 #pragma omp parallel num_threads(threads)
-    {
-      int t = omp_get_thread_num();
+    NBS__PARTS(t, threads) {
       int32_t from = nbs__cs_thread_start(&c, nbs__chunk(n, t, threads));
       int32_t to = nbs__cs_thread_start(&c, nbs__chunk(n, t + 1, threads));
       sinks[t].status = nbs__cs_sweep(&c, &sinks[t], from, to);

@@ -177,6 +177,9 @@ nbs_status nbs__thread_pairs_grow(nbs_context *ctx, int t, size_t need, nbs_pair
 int nbs__threads(const nbs_context *ctx, int64_t useful) {
 #if defined(_OPENMP)
   int t = ctx->threads > 0 ? ctx->threads : omp_get_max_threads();
+  /* called from inside parallel regions as deep as may be active (the caller's own, with
+   * nesting off): a region of ours would get one thread, which would do every part */
+  if (omp_get_active_level() >= omp_get_max_active_levels()) t = 1;
   if (t > NBS__THREADS_MAX) t = NBS__THREADS_MAX;
   if (t > useful) t = (int)useful;
   return t < 1 ? 1 : t;

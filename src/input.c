@@ -140,8 +140,7 @@ static int32_t nbs__scan_coords_threads(const double *x, size_t count, int dim, 
 #if defined(_OPENMP)
 #pragma omp parallel num_threads(threads)
 #endif
-  {
-    const int t = nbs__thread_num();
+  NBS__PARTS(t, threads) {
     const size_t from = groups * (size_t)t / (size_t)threads * NBS__SCAN_GROUP;
     const size_t end = groups * (size_t)(t + 1) / (size_t)threads * NBS__SCAN_GROUP;
     const size_t to = t + 1 == threads ? count : end;
@@ -173,8 +172,7 @@ static int32_t nbs__scan_radii_threads(const double *r, int32_t n, int threads, 
 #if defined(_OPENMP)
 #pragma omp parallel num_threads(threads)
 #endif
-  {
-    const int t = nbs__thread_num();
+  NBS__PARTS(t, threads) {
     const int32_t from = nbs__chunk(blocks, t, threads) * block;
     const int32_t to = t + 1 == threads ? n : nbs__chunk(blocks, t + 1, threads) * block;
     const int32_t bad = nbs__scan_radii(r + from, to - from, &tmax[t]);

@@ -175,7 +175,9 @@ nbs_status nbs__work_reserve(nbs_context *ctx, size_t bytes);
 /* Grows thread t's pair list to at least `need` pairs (thread-safe); *buf and *cap follow. */
 nbs_status nbs__thread_pairs_grow(nbs_context *ctx, int t, size_t need, nbs_pair **buf,
                                   size_t *cap);
-/* How many threads to use for work that can use at most `useful` (>= 1 always). */
+/* How many threads to use for work that can use at most `useful` (>= 1 always): the
+ * context's count (or OpenMP's default), 1 where no further parallel region may be active.
+ * A region may still get fewer than this (OMP_THREAD_LIMIT, OMP_DYNAMIC): see NBS__PARTS. */
 int nbs__threads(const nbs_context *ctx, int64_t useful);
 
 /* The calling thread's number in a parallel region (0 without OpenMP). */
@@ -186,6 +188,26 @@ static inline int nbs__thread_num(void) {
   return 0;
 #endif
 }
+
+/* The number of threads in the calling thread's team (1 without OpenMP). */
+static inline int nbs__team_size(void) {
+#if defined(_OPENMP)
+  return omp_get_num_threads();
+#else
+  return 1;
+#endif
+}
+
+/* The parts of the work that the calling thread of a parallel region does, where the work
+ * is cut into `parts` (the threads asked for with num_threads): part t is its own number,
+ * then every team-size-th after it. OpenMP may give a region fewer threads than it asks
+ * for: one, when the detection is called from inside the caller's own parallel region and
+ * nesting is off (the default); fewer under OMP_THREAD_LIMIT or OMP_DYNAMIC. Every part is
+ * then still done, by a thread that does several. With the team asked for, each thread
+ * does its own part, once. A region with barriers loops over its parts between each pair
+ * of them, and keeps what a part carries across a barrier in arrays indexed by part. */
+#define NBS__PARTS(t, parts)                                                                  \
+  for (int t = nbs__thread_num(), nbs__team = nbs__team_size(); t < (parts); t += nbs__team)
 
 /* Where thread t's share of n items starts, when `threads` share them evenly. */
 static inline int32_t nbs__chunk(int32_t n, int t, int threads) {

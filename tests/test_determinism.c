@@ -318,6 +318,89 @@ static void test_thread_counts(void) {
   }
 }
 
+/* Threads the runtime does not give as asked. A simulation code that threads its own loops
+ * may call nbs_detect from inside its parallel region, a context per thread: with nesting
+ * off (OpenMP's default) a region of the library then gets one thread, and with nesting on,
+ * OMP_DYNAMIC or OMP_THREAD_LIMIT, whatever the runtime gives. cellsort cuts its work into
+ * as many parts as the threads it asks for, and a thread of a smaller team does several
+ * (NBS__PARTS): the bytes must be those of one thread, from scratch and in a time step
+ * (the start from the last order, and its merge of the elements that moved). The settings:
+ * two threads of the caller, each detecting with a context of 0 (OpenMP's default), 2 and 3
+ * threads, nesting off and then on; and a context of 3 threads called from one thread with
+ * OMP_DYNAMIC on. ctest also runs the thread tests under OMP_THREAD_LIMIT=2, where 3 to 8
+ * threads asked get 2. Before NBS__PARTS, each of these crashed or gave a wrong error.
+ * Without OpenMP there is nothing to test here. */
+static void test_caller_threads(void) {
+#if defined(_OPENMP)
+  const int save_levels = omp_get_max_active_levels();
+  const int save_dynamic = omp_get_dynamic();
+  for (int dim = 2; dim <= 3; dim++) {
+    scene s = det_scene(DET_QUANTIZED, dim, 60000, dim == 2 ? 300.0 : 45.0, 0.0, 31);
+    /* a time step: every 50th element a quarter of a diameter further in x */
+    scene t = s;
+    t.coords = malloc((size_t)s.n * (size_t)dim * sizeof(double));
+    if (!t.coords) abort();
+    memcpy(t.coords, s.coords, (size_t)s.n * (size_t)dim * sizeof(double));
+    for (int64_t k = 0; k < s.n; k += 50) t.coords[k * dim] += 0.25;
+    pair_list ref[2];
+    nbs_context_def one = nbs_default_context_def();
+    one.threads = 1;
+    nbs_context *ctx;
+    ASSERT_OK(nbs_context_create(&one, &ctx));
+    ASSERT_OK(detect_raw(ctx, &s, NBS_CELLSORT, NBS_MODE_CONTACTS, &ref[0]));
+    ASSERT_OK(detect_raw(ctx, &t, NBS_CELLSORT, NBS_MODE_CONTACTS, &ref[1]));
+    nbs_context_destroy(ctx);
+    CHECK_MSG(ref[0].count > (size_t)s.n / 2 && ref[1].count > (size_t)s.n / 2,
+              "%dD: only %zu and %zu pairs", dim, ref[0].count, ref[1].count);
+    for (int setting = 0; setting < 3; setting++) {
+      const bool nested = setting < 2;
+      omp_set_max_active_levels(setting == 1 ? 2 : 1);
+      omp_set_dynamic(setting == 2);
+      int bad = 0, reused = 0, ran = 0;
+#pragma omp parallel num_threads(nested ? 2 : 1) reduction(+ : bad, reused, ran)
+      {
+        const int asked[] = {0, 2, 3};
+        for (int a = nested ? 0 : 2; a < 3; a++) {
+          nbs_context_def cdef = nbs_default_context_def();
+          cdef.threads = asked[a];
+          nbs_context *c;
+          if (nbs_context_create(&cdef, &c) != NBS_OK) {
+            bad++;
+            continue;
+          }
+          for (int step = 0; step < 2; step++) {
+            pair_list got;
+            nbs_stats st;
+            if (detect_raw(c, step ? &t : &s, NBS_CELLSORT, NBS_MODE_CONTACTS, &got) != NBS_OK ||
+                nbs_last_stats(c, &st) != NBS_OK) {
+              bad++;
+              continue;
+            }
+            bad += !pair_lists_equal(&got, &ref[step]);
+            reused += step == 1 && st.reused_order && st.moved > 0;
+            ran++;
+            pair_list_free(&got);
+          }
+          nbs_context_destroy(c);
+        }
+      }
+      lists_compared += ran;
+      const int want = nested ? 2 * 3 * 2 : 2;
+      CHECK_MSG(bad == 0 && ran == want, "%dD, setting %d: %d of %d detections differ from one "
+                "thread's or failed", dim, setting, bad + (want - ran), want);
+      CHECK_MSG(reused == want / 2, "%dD, setting %d: %d of %d time steps started from the "
+                "last order", dim, setting, reused, want / 2);
+    }
+    pair_list_free(&ref[0]);
+    pair_list_free(&ref[1]);
+    free(t.coords);
+    scene_free(&s);
+  }
+  omp_set_max_active_levels(save_levels);
+  omp_set_dynamic(save_dynamic);
+#endif
+}
+
 /* The partition: cellsort's sort by the top digit with the coordinates carried along
  * (NBS_PARTITION=always, read when a context is created; by default only inputs larger than
  * 1 GiB take it) gives the bytes of the sort and the gather (NBS_PARTITION=never), in
@@ -796,6 +879,7 @@ int main(int argc, char **argv) {
       {"hash_function", test_hash_function},
       {"repeat_runs", test_repeat_runs},
       {"thread_counts", test_thread_counts},
+      {"caller_threads", test_caller_threads},
       {"partition", test_partition},
       {"kernels", test_kernels},
       {"time_steps", test_time_steps},

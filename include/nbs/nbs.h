@@ -140,7 +140,10 @@ typedef struct nbs_context_def {
   size_t max_pairs;
   /* Threads for the algorithms that use them (cellsort, and so auto): 0 (the default) for
    * OpenMP's default (OMP_NUM_THREADS, or the cores), 1 for none. The pairs are the same,
-   * in the same order, for any number. Ignored when the library is built without OpenMP. */
+   * in the same order, for any number, and whatever OpenMP gives of them: a detection
+   * called from inside the caller's own parallel region (a context per thread) uses one
+   * thread there unless nesting is on, and OMP_THREAD_LIMIT or OMP_DYNAMIC may give it fewer
+   * than asked. Ignored when the library is built without OpenMP. */
   int threads;
 } nbs_context_def;
 
