@@ -300,6 +300,7 @@ size_t nbs_context_peak_bytes(const nbs_context *ctx) { return ctx ? ctx->peak_b
 
 nbs_status nbs_context_reserve(nbs_context *ctx, int64_t n, size_t pairs) {
   if (!ctx) return NBS_ERR_NULL;
+  if (ctx->busy) return NBS_ERR_BUSY; /* its detection's error and figures stay as they are */
   ctx->error[0] = '\0';
   ctx->error_element = -1;
   if (n < 0 || n > INT32_MAX) {
@@ -373,8 +374,18 @@ nbs_detect_def nbs_default_detect_def(void) {
 /* In callback mode pairs are batched in the context's pair buffer, this many at a time. */
 #define NBS__BATCH 4096
 
+static nbs_status nbs__detect(nbs_context *ctx, const nbs_input *in, const nbs_detect_def *def);
+
 nbs_status nbs_detect(nbs_context *ctx, const nbs_input *in, const nbs_detect_def *def) {
   if (!ctx) return NBS_ERR_NULL;
+  if (ctx->busy) return NBS_ERR_BUSY; /* the detection's error and figures stay as they are */
+  ctx->busy = true;
+  const nbs_status s = nbs__detect(ctx, in, def);
+  ctx->busy = false;
+  return s;
+}
+
+static nbs_status nbs__detect(nbs_context *ctx, const nbs_input *in, const nbs_detect_def *def) {
   ctx->error[0] = '\0';
   ctx->error_element = -1;
   ctx->pairs_count = 0;

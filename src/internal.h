@@ -120,6 +120,10 @@ struct nbs_context {
    * (nbs__axis_order); read by the tests. */
   int8_t axes[3];
 
+  /* In a detection (nbs_detect): a pair callback that calls back into the context is
+   * refused (NBS_ERR_BUSY) instead of freeing the arrays the detection is using. */
+  bool busy;
+
   /* The pair buffer (buffer mode) and the batch used in callback mode. */
   nbs_pair *pairs;
   size_t pairs_cap, pairs_count;

@@ -4,7 +4,7 @@
 #include "util.h"
 
 static void test_status_names(void) {
-  for (int s = 0; s <= NBS_ERR_ARGUMENT; s++) {
+  for (int s = 0; s <= NBS_ERR_BUSY; s++) {
     CHECK_TRUE(strcmp(nbs_status_name((nbs_status)s), "unknown") != 0);
     CHECK_TRUE(nbs_status_message((nbs_status)s)[0] != '\0');
     for (int t = 0; t < s; t++) {

@@ -330,6 +330,73 @@ static void test_pair_limits(void) {
   scene_free(&s);
 }
 
+/* A pair callback that calls back into the detecting context: a detection of another,
+ * larger scene and a reserve (each would have freed the arrays the outer detection is
+ * using: a use after free under ASan before NBS_ERR_BUSY), then nbs_pairs; and a detection
+ * on another context, which works. The outer detection must go on as if nothing happened. */
+typedef struct reentry {
+  nbs_context *ctx, *other;
+  const nbs_input *big;
+  nbs_status inner, reserve, elsewhere;
+  size_t pairs_seen, count_inside;
+  long calls;
+} reentry;
+
+static int call_back_in(void *user, const nbs_pair *pairs, size_t count) {
+  (void)pairs;
+  reentry *r = user;
+  if (r->calls++ == 0) {
+    r->inner = nbs_detect(r->ctx, r->big, NULL);
+    r->reserve = nbs_context_reserve(r->ctx, 10 * r->big->n, 1000000);
+    nbs_pairs(r->ctx, &r->count_inside);
+    r->elsewhere = nbs_detect(r->other, r->big, NULL);
+  }
+  r->pairs_seen += count;
+  return 0;
+}
+
+static void test_reentry(void) {
+  scene s = test_scene(SCENE_UNIFORM, 3, 20000, 0.5);
+  scene b = test_scene(SCENE_UNIFORM, 3, 80000, 0.3);
+  nbs_input in = scene_input(&s), big = scene_input(&b);
+  for (int a = 0; a < NBS_ALGORITHM_COUNT; a++) {
+    if (a == NBS_DIRECT) continue; /* O(N^2) on 20000 elements: the others cover the sink */
+    nbs_context *ctx, *other;
+    ASSERT_OK(nbs_context_create(NULL, &ctx));
+    ASSERT_OK(nbs_context_create(NULL, &other));
+    pair_list ref;
+    ASSERT_OK(detect_sorted(ctx, &s, (nbs_algorithm)a, NBS_MODE_CONTACTS, &ref));
+    const size_t held = nbs_context_bytes(ctx);
+    reentry r = {ctx, other, &big, NBS_OK, NBS_OK, NBS_ERR_NULL, 0, 99, 0};
+    nbs_detect_def def = nbs_default_detect_def();
+    def.algorithm = (nbs_algorithm)a;
+    def.callback = call_back_in;
+    def.user = &r;
+    CHECK_STATUS(nbs_detect(ctx, &in, &def), NBS_OK);
+    CHECK_STATUS(r.inner, NBS_ERR_BUSY);
+    CHECK_STATUS(r.reserve, NBS_ERR_BUSY);
+    CHECK_STATUS(r.elsewhere, NBS_OK);
+    CHECK_EQ(r.count_inside, 0);
+    CHECK_MSG(r.calls >= 2 && r.pairs_seen == ref.count, "%s: %ld batches, %zu pairs of %zu",
+              nbs_algorithm_name((nbs_algorithm)a), r.calls, r.pairs_seen, ref.count);
+    CHECK_TRUE(nbs_context_bytes(ctx) == held); /* the reserve changed nothing */
+    CHECK_TRUE(nbs_context_error(ctx)[0] == '\0');
+    nbs_stats st;
+    ASSERT_OK(nbs_last_stats(ctx, &st));
+    CHECK_EQ(st.n, s.n);
+    /* and the context is whole after it */
+    pair_list again;
+    ASSERT_OK(detect_sorted(ctx, &s, (nbs_algorithm)a, NBS_MODE_CONTACTS, &again));
+    CHECK_TRUE(pair_lists_equal(&ref, &again));
+    pair_list_free(&again);
+    pair_list_free(&ref);
+    nbs_context_destroy(other);
+    nbs_context_destroy(ctx);
+  }
+  scene_free(&b);
+  scene_free(&s);
+}
+
 static void test_allocator_def(void) {
   nbs_context_def cdef = nbs_default_context_def();
   test_alloc ta = {0, 0, 0, -1, 0, 0};
@@ -439,6 +506,7 @@ int main(int argc, char **argv) {
       {"bad_numbers_threads", test_bad_numbers_threads},
       {"budget_extent", test_budget_extent},
       {"pair_limits", test_pair_limits},
+      {"reentry", test_reentry},
       {"allocator_def", test_allocator_def},
       {"allocation_failure", test_allocation_failure},
   };

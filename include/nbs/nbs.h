@@ -72,7 +72,9 @@ NBS_API const char *nbs_version(void);
   X(NBS_ERR_NOMEM, 10, "nomem", "memory allocation failed")                                   \
   X(NBS_ERR_PAIRS, 11, "pairs", "the number of pairs exceeds what the pair buffer can hold")  \
   X(NBS_ERR_STOPPED, 12, "stopped", "the pair callback asked to stop")                        \
-  X(NBS_ERR_ARGUMENT, 13, "argument", "an argument is out of its documented range")
+  X(NBS_ERR_ARGUMENT, 13, "argument", "an argument is out of its documented range")        \
+  X(NBS_ERR_BUSY, 14, "busy",                                                                 \
+    "the context is in a detection: a pair callback called back into it")
 
 typedef enum nbs_status {
 #define NBS_X_ENUM(e, v, name, msg) e = v,
@@ -167,7 +169,7 @@ NBS_API size_t nbs_context_peak_bytes(const nbs_context *ctx);
 
 /* Grows the context ahead of time so that detections of up to n elements with up to
  * pairs pairs allocate nothing for their elements or pairs (cell arrays still follow the
- * domain's extent). NBS_ERR_NULL, NBS_ERR_COUNT, NBS_ERR_NOMEM. */
+ * domain's extent). NBS_ERR_NULL, NBS_ERR_COUNT, NBS_ERR_NOMEM, NBS_ERR_BUSY. */
 NBS_API nbs_status nbs_context_reserve(nbs_context *ctx, int64_t n, size_t pairs);
 
 /* The message of the last failed call on this context, with detail where there is one
@@ -192,7 +194,10 @@ typedef struct nbs_pair {
 } nbs_pair;
 
 /* Receives pairs in batches. Return 0 to continue, non-zero to stop the detection (it then
- * returns NBS_ERR_STOPPED). The batch is valid only during the call. */
+ * returns NBS_ERR_STOPPED). The batch is valid only during the call. The callback may use
+ * other contexts freely; on the detecting context, nbs_detect and nbs_context_reserve return
+ * NBS_ERR_BUSY (changing nothing), nbs_pairs gives no pairs, and nbs_context_destroy must not
+ * be called. */
 typedef int (*nbs_pair_fn)(void *user, const nbs_pair *pairs, size_t count);
 
 typedef struct nbs_detect_def {
@@ -221,7 +226,7 @@ NBS_API nbs_detect_def nbs_default_detect_def(void);
  * unless it finds more pairs than the buffer has held before.
  * Errors: NBS_ERR_NULL, NBS_ERR_DIM, NBS_ERR_COUNT, NBS_ERR_COORD, NBS_ERR_RADIUS,
  * NBS_ERR_ALGORITHM, NBS_ERR_MODE, NBS_ERR_BUDGET, NBS_ERR_EXTENT, NBS_ERR_NOMEM,
- * NBS_ERR_PAIRS, NBS_ERR_STOPPED. After an error the buffer holds no valid pairs and the
+ * NBS_ERR_PAIRS, NBS_ERR_STOPPED, NBS_ERR_BUSY (called from this detection's own callback). After an error the buffer holds no valid pairs and the
  * context remains usable. */
 NBS_API nbs_status nbs_detect(nbs_context *ctx, const nbs_input *in, const nbs_detect_def *def);
 
