@@ -197,7 +197,8 @@ typedef struct nbs_pair {
  * returns NBS_ERR_STOPPED). The batch is valid only during the call. The callback may use
  * other contexts freely; on the detecting context, nbs_detect and nbs_context_reserve return
  * NBS_ERR_BUSY (changing nothing), nbs_pairs gives no pairs, and nbs_context_destroy must not
- * be called. */
+ * be called. The input's coordinates and radii must stay as they are until nbs_detect
+ * returns: some algorithms read them again after a batch. */
 typedef int (*nbs_pair_fn)(void *user, const nbs_pair *pairs, size_t count);
 
 typedef struct nbs_detect_def {
