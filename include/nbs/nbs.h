@@ -118,6 +118,7 @@ typedef enum nbs_mode {
  * realloc is optional (NULL: the library allocates, copies and frees); like C's realloc
  * it returns NULL and leaves the block as it was on failure. The pair buffer grows with it,
  * which for large buffers avoids holding the old and the new one at once (glibc remaps).
+ * A detection with threads may call these from its OpenMP threads, one call at a time.
  */
 typedef struct nbs_allocator {
   void *(*alloc)(void *opaque, size_t size);
