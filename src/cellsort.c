@@ -1607,9 +1607,14 @@ nbs__cs_core_split(const nbs__cs_keying *kg, const double *restrict x, int dim, 
  * passes of 12 bytes per element, each to and from memory (3D sparse, N = 1e6: a third of
  * the detection's time). So:
  *   a. a histogram per axis of where a sample of the elements lies (every stride-th, about
- *      2^16 of them; 2^12 bins at most), and on each axis the fewest consecutive bins that
- *      hold all but 1 / (16 dim) of the sample: the core box, from the first of those bins
- *      on, as long as the bits its keys need allow;
+ *      2^13 of them; 2^12 bins at most), and on each axis the fewest consecutive bins that
+ *      hold all but 1 / (16 dim) of the sample; then a histogram within those bins, in bins
+ *      as fine as 2^12 of them allow, and the bins from the first to the last that hold any
+ *      of the sample: the core box, its sides rounded up to powers of two, as long as the
+ *      bits its keys need allow. (With the first histogram alone, whose bins are hundreds
+ *      of cells wide where the far elements stretch the grid, the sparse scene's core of
+ *      100 cells a side took a bin or two on each axis: 28 bits where 24 do, which cost the
+ *      sort its top digit in cache, four passes to and from memory instead);
  *   b. the core's elements as packed words (the key relative to the core box's corner, and
  *      the element), the others (the outliers) as (key, element), at the start of key[] and
  *      idx[] (nbs__cs_core_split); then each group's parts of the threads joined up;
@@ -1624,7 +1629,11 @@ nbs__cs_core_split(const nbs__cs_keying *kg, const double *restrict x, int dim, 
  * Measured (3D, N = 1e6, one thread, interleaved, min of 5 processes, ns per element): the
  * sparse scene 46.5 -> 41.4 and the clustered one 39.4 -> 34.8, with uniform at 31.2 in the
  * same run; two threads (min of 4) 32.7 -> 23.9 and 27.2 -> 21.6, though the sample and the
- * merge run on one; sparse at N = 1e7 50.4 -> 43.0. Returns false, having written nothing
+ * merge run on one; sparse at N = 1e7 50.4 -> 43.0. Then the second histogram, the sample
+ * of 2^13 where it was 2^16 (its reads are far apart, and they took 1-2 ns per element of
+ * the detection) and the merge a run at a time (below), interleaved, min of 5: sparse 44.0
+ * -> 39.3, clustered 39.4 -> 37.0; two threads 23.5 -> 21.0 and 21.6 -> 20.0; the same
+ * bytes. Returns false, having written nothing
  * the caller needs, where the core's keys would not fit a word with the element either.
  * Scratch: the coordinate arrays (the histograms, the core's words and the bucket scratch,
  * the outliers at their end). */
@@ -1641,38 +1650,76 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
   uint64_t mask[3] = {0, 0, 0};
   /* a. the histograms of a sample, every stride-th element (about 2^16 of them), in the
    * coordinate arrays: at most 2^12 bins per axis, and at most 2n, which they hold */
-  int hb = 0, sh[3] = {0, 0, 0};
+  int hb = 0;
   while (hb < NBS__CS_CORE_BINS && ((int64_t)2 << hb) <= 2 * (int64_t)n) hb++;
-  for (int a = 0; a < dim; a++) {
-    mask[a] = ((uint64_t)1 << wd[a]) - 1; /* a field has at most 33 bits */
-    sh[a] = wd[a] > hb ? wd[a] - hb : 0;
-  }
+  for (int a = 0; a < dim; a++) mask[a] = ((uint64_t)1 << wd[a]) - 1; /* at most 33 bits */
   uint32_t *hall = (uint32_t *)(void *)c->xs;
-  memset(hall, 0, ((size_t)dim << hb) * sizeof *hall);
-  const int32_t stride = n >> 16 > 0 ? n >> 16 : 1;
-  int64_t m = 0;
-  for (int64_t k = 0; k < n; k += stride, m++) {
-    const uint64_t kk = nbs__cs_cellkey(kg, x + (size_t)k * (size_t)dim);
-    for (int a = 0; a < dim; a++) hall[((size_t)a << hb) + (((kk >> at[a]) & mask[a]) >> sh[a])]++;
-  }
+  const int32_t stride = n >> 13 > 0 ? n >> 13 : 1;
+  const int64_t m = ((int64_t)n + stride - 1) / stride; /* the sample's size */
   const int64_t need = m - m / (16 * dim);
-  uint64_t lo[3] = {0, 0, 0};
-  int cw[3] = {0, 0, 0}, cb = 0;
-  for (int a = 0; a < dim; a++) {
-    const uint32_t *h = hall + ((size_t)a << hb);
-    const size_t bins = (size_t)1 << (wd[a] - sh[a]);
-    size_t b0 = 0, best0 = 0, best = bins;
-    int64_t sum = 0;
-    for (size_t b1 = 0; b1 < bins; b1++) {
-      sum += h[b1];
-      while (b0 < b1 && sum - h[b0] >= need) sum -= h[b0++];
-      if (sum >= need && b1 - b0 + 1 < best) {
-        best = b1 - b0 + 1;
-        best0 = b0;
+  /* the sample's keys, after the histograms (hall and they take at most 4 dim n + 8 n
+   * bytes of the coordinate arrays' 8 dim n) */
+  uint64_t *sample = (uint64_t *)(void *)(hall + ((size_t)dim << hb));
+  /* each axis's window [lo, lo + span) of its field: the whole field, then the fewest bins
+   * that hold `need` of the sample, then within those the bins, finer, from the first to the
+   * last that hold any of it */
+  uint64_t lo[3] = {0, 0, 0}, span[3] = {1, 1, 1}, lo0[3] = {0, 0, 0};
+  for (int a = 0; a < dim; a++) span[a] = (uint64_t)1 << wd[a];
+  for (int round = 0; round < 2; round++) {
+    if (round == 1) memcpy(lo0, lo, sizeof lo);
+    int sh[3] = {0, 0, 0};
+    size_t bins[3] = {1, 1, 1};
+    for (int a = 0; a < dim; a++) {
+      const int w = nbs__bits(span[a]);
+      sh[a] = w > hb ? w - hb : 0;
+      bins[a] = (size_t)((span[a] - 1) >> sh[a]) + 1; /* at most 2^hb */
+    }
+    memset(hall, 0, ((size_t)dim << hb) * sizeof *hall);
+    for (int64_t k = 0, s = 0; k < n; k += stride, s++) {
+      uint64_t kk;
+      if (round == 0) {
+        /* the sample's reads are far apart: ask for them ahead */
+        if (k + 16 * (int64_t)stride < n) {
+          __builtin_prefetch(x + (size_t)(k + 16 * (int64_t)stride) * (size_t)dim);
+        }
+        kk = nbs__cs_cellkey(kg, x + (size_t)k * (size_t)dim);
+        sample[s] = kk;
+      } else {
+        kk = sample[s];
+      }
+      for (int a = 0; a < dim; a++) {
+        const uint64_t v = ((kk >> at[a]) & mask[a]) - lo[a];
+        if (v < span[a]) hall[((size_t)a << hb) + (v >> sh[a])]++;
       }
     }
-    lo[a] = (uint64_t)best0 << sh[a];
-    cw[a] = nbs__bits((uint64_t)best << sh[a]);
+    for (int a = 0; a < dim; a++) {
+      const uint32_t *h = hall + ((size_t)a << hb);
+      int64_t want = 0; /* need, and then all of the sample in the window */
+      for (size_t b = 0; round == 1 && b < bins[a]; b++) want += h[b];
+      if (round == 0) want = need;
+      size_t b0 = 0, best0 = 0, best = bins[a];
+      int64_t sum = 0;
+      for (size_t b1 = 0; b1 < bins[a]; b1++) {
+        sum += h[b1];
+        while (b0 < b1 && sum - h[b0] >= want) sum -= h[b0++];
+        if (sum >= want && b1 - b0 + 1 < best) {
+          best = b1 - b0 + 1;
+          best0 = b0;
+        }
+      }
+      const uint64_t l = (uint64_t)best0 << sh[a], w = (uint64_t)best << sh[a];
+      lo[a] += l;
+      span[a] = w < span[a] - l ? w : span[a] - l;
+    }
+  }
+  /* the box's sides are powers of two: their room beyond the window, half of it below, as
+   * far as the first round's window (elements beyond the sample's lowest are not left out
+   * for that; those the first round left out stay out) */
+  int cw[3] = {0, 0, 0}, cb = 0;
+  for (int a = 0; a < dim; a++) {
+    cw[a] = nbs__bits(span[a]);
+    const uint64_t below = (((uint64_t)1 << cw[a]) - span[a]) / 2;
+    lo[a] -= below < lo[a] - lo0[a] ? below : lo[a] - lo0[a];
     cb += cw[a];
   }
   if (cb + eb > 63) return false;
@@ -1716,28 +1763,61 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
     nbs__radix(A, NULL, key, NULL, key, NULL, NC, eb, nbs__radix_digits(cb), hist, threads,
                A + NC, (size_t)(tk - (A + NC)));
   }
-  /* d. the merge, from the end: place p takes the larger of the last core word and the last
-   * outlier; it never overwrites a core word not yet read, since a core word only moves up */
+  /* d. the merge, from the end, a run at a time: outlier j goes after the core words whose
+   * keys are below its own (a_j of them, found by galloping down from a_(j+1), then
+   * bisection), and the run of core words between it and outlier j + 1 moves up by j + 1
+   * places, each word put back in the whole grid's terms. A run moves eight words at a time,
+   * all eight read before any is written, so that a move by fewer places than eight reads
+   * each word before it is overwritten (a core word only moves up), with no branch per word
+   * (word by word, with a branch on which of the two came next, it took 4 ns per element:
+   * 3D sparse, N = 1e6, perf). */
   const uint64_t em = ((uint64_t)1 << eb) - 1;
   const int s1 = at[1], s2 = at[2], c0 = cw[0], c01 = cw[0] + cw[1];
   const uint64_t m0 = ((uint64_t)1 << cw[0]) - 1, m1 = ((uint64_t)1 << cw[1]) - 1;
 #define NBS__CS_WHOLE(w)                                                                       \
   ((((w) >> eb >> c01) + lo[2]) << s2 | ((((w) >> eb >> c0) & m1) + lo[1]) << s1 |               \
    ((((w) >> eb) & m0) + lo[0]))
-  int32_t i = NC - 1, j = NO - 1, p = n - 1;
-  uint64_t ci = i >= 0 ? NBS__CS_WHOLE(key[i]) : 0;
-  for (; j >= 0; p--) {
-    if (i < 0 || tk[j] > ci) {
-      key[p] = tk[j];
-      idx[p] = ti[j--];
-    } else {
-      const int32_t el = (int32_t)(key[i] & em);
-      key[p] = ci;
-      idx[p] = el;
-      i--;
-      ci = i >= 0 ? NBS__CS_WHOLE(key[i]) : 0;
+  int32_t r = NC; /* the core words below outlier j + 1 */
+  for (int32_t j = NO - 1; j >= 0; j--) {
+    const uint64_t o = tk[j];
+    /* the core words [hi, r) are above o; then those below lo are below it */
+    int32_t hi = r, lo_ = 0;
+    for (int32_t step = 1;; step *= 2) {
+      if (hi - step < 0) break;
+      if (NBS__CS_WHOLE(key[hi - step]) < o) {
+        lo_ = hi - step + 1;
+        break;
+      }
+      hi -= step;
+      if (step > INT32_MAX / 2) break;
     }
+    while (lo_ < hi) {
+      const int32_t mid = lo_ + (hi - lo_) / 2;
+      if (NBS__CS_WHOLE(key[mid]) < o) lo_ = mid + 1;
+      else hi = mid;
+    }
+    const int32_t by = j + 1;
+    int32_t q = r;
+    while (q - lo_ >= 8) {
+      q -= 8;
+      uint64_t w[8];
+      for (int l = 0; l < 8; l++) w[l] = key[q + l];
+      for (int l = 0; l < 8; l++) {
+        idx[q + by + l] = (int32_t)(w[l] & em);
+        key[q + by + l] = NBS__CS_WHOLE(w[l]);
+      }
+    }
+    while (q > lo_) {
+      q--;
+      const uint64_t w = key[q];
+      idx[q + by] = (int32_t)(w & em);
+      key[q + by] = NBS__CS_WHOLE(w);
+    }
+    key[lo_ + j] = o;
+    idx[lo_ + j] = ti[j];
+    r = lo_;
   }
+  const int32_t i = r - 1;
   /* the core words below the last outlier: in place */
 #if defined(_OPENMP)
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
