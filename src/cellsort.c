@@ -1769,8 +1769,8 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
    * places, each word put back in the whole grid's terms. A run moves eight words at a time,
    * all eight read before any is written, so that a move by fewer places than eight reads
    * each word before it is overwritten (a core word only moves up), with no branch per word
-   * (word by word, with a branch on which of the two came next, it took 4 ns per element:
-   * 3D sparse, N = 1e6, perf). */
+   * (against word by word, with a branch on which of the two came next: 3D, N = 1e6,
+   * interleaved, min of 6, sparse 40.0 -> 39.5 ns per element, clustered 37.1 -> 36.7). */
   const uint64_t em = ((uint64_t)1 << eb) - 1;
   const int s1 = at[1], s2 = at[2], c0 = cw[0], c01 = cw[0] + cw[1];
   const uint64_t m0 = ((uint64_t)1 << cw[0]) - 1, m1 = ((uint64_t)1 << cw[1]) - 1;
