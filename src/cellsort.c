@@ -1633,7 +1633,12 @@ nbs__cs_core_split(const nbs__cs_keying *kg, const double *restrict x, int dim, 
  * of 2^13 where it was 2^16 (its reads are far apart, and they took 1-2 ns per element of
  * the detection) and the merge a run at a time (below), interleaved, min of 5: sparse 44.0
  * -> 39.3, clustered 39.4 -> 37.0; two threads 23.5 -> 21.0 and 21.6 -> 20.0; the same
- * bytes. Returns false, having written nothing
+ * bytes. Tried and left out: the same for packed words whose whole keys take four passes
+ * or more (2D sparse and clustered: 43 bits, five passes to and from memory, against the
+ * core's 23, three, the first in memory): no faster (2D sparse 23.2 / 23.2, clustered 23.6
+ * / 23.2: the split and the merge cost what the two passes did), and the huge scene, whose
+ * elements are spread evenly, paid for the sample and then sorted as before (3D 38.2 ->
+ * 39.2, 2D 23.7 -> 24.4). Returns false, having written nothing
  * the caller needs, where the core's keys would not fit a word with the element either.
  * Scratch: the coordinate arrays (the histograms, the core's words and the bucket scratch,
  * the outliers at their end). */
