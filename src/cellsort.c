@@ -1653,17 +1653,17 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
   const int at[3] = {0, kg->sy, kg->sz};
   const int wd[3] = {c->bx, c->by, dim == 3 ? bits - c->bx - c->by : 0};
   uint64_t mask[3] = {0, 0, 0};
-  /* a. the histograms of a sample, every stride-th element (about 2^16 of them), in the
-   * coordinate arrays: at most 2^12 bins per axis, and at most 2n, which they hold */
+  /* a. the histograms of a sample, every stride-th element (about 2^13 of them), in the
+   * coordinate arrays: at most 2^12 bins per axis, and at most n / 2, so that they and the
+   * sample's keys after them take at most 2 dim n + 8 n bytes of the arrays' 8 dim n */
   int hb = 0;
-  while (hb < NBS__CS_CORE_BINS && ((int64_t)2 << hb) <= 2 * (int64_t)n) hb++;
+  while (hb < NBS__CS_CORE_BINS && ((int64_t)2 << hb) <= (int64_t)n) hb++;
   for (int a = 0; a < dim; a++) mask[a] = ((uint64_t)1 << wd[a]) - 1; /* at most 33 bits */
   uint32_t *hall = (uint32_t *)(void *)c->xs;
   const int32_t stride = n >> 13 > 0 ? n >> 13 : 1;
   const int64_t m = ((int64_t)n + stride - 1) / stride; /* the sample's size */
   const int64_t need = m - m / (16 * dim);
-  /* the sample's keys, after the histograms (hall and they take at most 4 dim n + 8 n
-   * bytes of the coordinate arrays' 8 dim n) */
+  /* the sample's keys, after the histograms */
   uint64_t *sample = (uint64_t *)(void *)(hall + ((size_t)dim << hb));
   /* each axis's window [lo, lo + span) of its field: the whole field, then the fewest bins
    * that hold `need` of the sample, then within those the bins, finer, from the first to the
