@@ -1383,13 +1383,17 @@ static int32_t nbs__cs_split(const uint64_t *key, int32_t k, const uint64_t *S, 
 }
 
 /* Merges the m sorted words S taken out (their coordinates read from the input) into the k
- * kept words at the start of key[] (with their coordinates), in place, from the end: place
- * p takes the larger of the last kept and the last taken out, and never overwrites a kept
- * word not yet read, since a kept word only moves up. In T parts (one per thread asked
- * for) part t fills the places [n t / T, n (t + 1) / T), whose kept words and words of S
- * the merge path gives; the kept words it reads below its first place lie in the places of
- * the parts before it, so it copies them to `side` (room for `cap` elements) before any
- * part is written. */
+ * kept words at the start of key[] (with their coordinates), in place, from the end, a word
+ * of S at a time: the kept words above it (found by galloping down from the last, then
+ * bisection) move up as a run, one memmove per array, and it takes the place below them; a
+ * kept word only moves up, so none is overwritten before it is read. (Place by place, with
+ * a branch on which came next, the merge took 0.4 ns per element more in 3D and 0.9 in 2D:
+ * time steps of 1e-3, N = 1e6, interleaved, min of 4, 32.8 -> 32.4 and 18.0 -> 17.2; the
+ * moves are now at the memory's speed, 2.9 ns of the 3D step's 33 by perf.) In T parts
+ * (one per thread asked for) part t fills the places [n t / T, n (t + 1) / T), whose kept
+ * words and words of S the merge path gives; the kept words it reads below its first place
+ * lie in the places of the parts before it, so it copies them to `side` (room for `cap`
+ * elements) before any part is written. */
 static void nbs__cs_merge(const nbs__cs *c, const nbs__run *run, int32_t k, const uint64_t *S,
                           int64_t m, uint64_t *side, int64_t cap, int threads) {
   const int32_t n = c->n;
@@ -1431,33 +1435,70 @@ static void nbs__cs_merge(const nbs__cs *c, const nbs__run *run, int32_t k, cons
       const int32_t P0 = nbs__chunk(n, t, threads), P1 = nbs__chunk(n, t + 1, threads);
       const int32_t I0 = I[t], I1 = I[t + 1];
       const int64_t J0 = P0 - I0, J1 = P1 - I1, o = off[t] - I0;
-      int32_t i = I1 - 1;
-      int64_t j = J1 - 1;
-      /* once S's words are placed, the kept words left are in place when J0 is 0 */
-      for (int32_t p = P1 - 1; p >= P0 && (j >= J0 || J0 > 0); p--) {
-        const bool low = i < P0; /* copied to side */
-        const uint64_t kw = i >= I0 ? (low ? sk[o + i] : key[i]) : 0;
-        if (i >= I0 && (j < J0 || kw > S[j])) {
-          key[p] = kw;
-          xs[p] = low ? sx[o + i] : xs[i];
-          ys[p] = low ? sy[o + i] : ys[i];
-          if (dim == 3) zs[p] = low ? sz[o + i] : zs[i];
-          if (rs) rs[p] = low ? sr[o + i] : rs[i];
-          i--;
-        } else {
-          /* the elements taken out are few and anywhere: ask for the coordinates of the one
-           * eight insertions ahead */
-          if (j >= J0 + 8) {
-            const size_t ea = (size_t)(S[j - 8] & emask) * (size_t)dim;
-            __builtin_prefetch(x + ea);
-            __builtin_prefetch(x + ea + (dim - 1));
-            if (rs) __builtin_prefetch(r + (S[j - 8] & emask));
+      /* the kept word i, from the side copy below P0 */
+#define NBS__CS_KEPT(i) ((i) < P0 ? sk[o + (i)] : key[i])
+      /* the kept words [lo, hi) up by `by` places: those at P0 and above within the arrays
+       * (memmove: a move by fewer places than the run overlaps itself), those below from
+       * the side copy */
+#define NBS__CS_RUN(lo, hi, by)                                                                \
+  do {                                                                                        \
+    const int32_t m0 = (lo) > P0 ? (lo) : P0, m1 = (hi);                                      \
+    if (m1 > m0) {                                                                            \
+      const size_t len = (size_t)(m1 - m0), d = (size_t)m0 + (size_t)(by);                   \
+      memmove(key + d, key + m0, len * sizeof *key);                                          \
+      memmove(xs + d, xs + m0, len * sizeof *xs);                                             \
+      memmove(ys + d, ys + m0, len * sizeof *ys);                                             \
+      if (dim == 3) memmove(zs + d, zs + m0, len * sizeof *zs);                               \
+      if (rs) memmove(rs + d, rs + m0, len * sizeof *rs);                                     \
+    }                                                                                         \
+    const int32_t s1 = (hi) < P0 ? (hi) : P0;                                                 \
+    for (int32_t q = (lo); q < s1; q++) {                                                     \
+      const size_t d = (size_t)q + (size_t)(by);                                             \
+      key[d] = sk[o + q];                                                                     \
+      xs[d] = sx[o + q];                                                                      \
+      ys[d] = sy[o + q];                                                                      \
+      if (dim == 3) zs[d] = sz[o + q];                                                        \
+      if (rs) rs[d] = sr[o + q];                                                              \
+    }                                                                                         \
+  } while (0)
+      int32_t rr = I1; /* the kept words [I0, rr) are not placed yet */
+      for (int64_t j = J1 - 1; j >= J0; j--) {
+        const uint64_t w = S[j];
+        /* the kept words above w: [hi, rr) at least, galloping down, then by bisection */
+        int32_t hi = rr, lo = I0;
+        for (int32_t step = 1;; step *= 2) {
+          if (hi - step < I0) break;
+          if (NBS__CS_KEPT(hi - step) < w) {
+            lo = hi - step + 1;
+            break;
           }
-          const uint64_t w = S[j--];
-          key[p] = w;
-          nbs__cs_take(c, run, p, (int32_t)(w & emask));
+          hi -= step;
+          if (step > INT32_MAX / 2) break;
         }
+        while (lo < hi) {
+          const int32_t mid = lo + (hi - lo) / 2;
+          if (NBS__CS_KEPT(mid) < w) lo = mid + 1;
+          else hi = mid;
+        }
+        /* kept word i has the j + 1 words S[0 .. j] below it: to place i + j + 1 */
+        NBS__CS_RUN(lo, rr, j + 1);
+        /* the elements taken out are few and anywhere: ask for the coordinates of the one
+         * eight insertions ahead */
+        if (j >= J0 + 8) {
+          const size_t ea = (size_t)(S[j - 8] & emask) * (size_t)dim;
+          __builtin_prefetch(x + ea);
+          __builtin_prefetch(x + ea + (dim - 1));
+          if (rs) __builtin_prefetch(r + (S[j - 8] & emask));
+        }
+        const int32_t p = lo + (int32_t)j;
+        key[p] = w;
+        nbs__cs_take(c, run, p, (int32_t)(w & emask));
+        rr = lo;
       }
+      /* the kept words below this part's words of S, up by the J0 words of S before it */
+      if (J0 > 0) NBS__CS_RUN(I0, rr, J0);
+#undef NBS__CS_RUN
+#undef NBS__CS_KEPT
     }
   }
 }

@@ -228,8 +228,8 @@ NBS_API nbs_detect_def nbs_default_detect_def(void);
  * unless it finds more pairs than the buffer has held before.
  * Errors: NBS_ERR_NULL, NBS_ERR_DIM, NBS_ERR_COUNT, NBS_ERR_COORD, NBS_ERR_RADIUS,
  * NBS_ERR_ALGORITHM, NBS_ERR_MODE, NBS_ERR_BUDGET, NBS_ERR_EXTENT, NBS_ERR_NOMEM,
- * NBS_ERR_PAIRS, NBS_ERR_STOPPED, NBS_ERR_BUSY (called from this detection's own callback). After an error the buffer holds no valid pairs and the
- * context remains usable. */
+ * NBS_ERR_PAIRS, NBS_ERR_STOPPED, NBS_ERR_BUSY (called from this detection's own callback).
+ * After an error the buffer holds no valid pairs and the context remains usable. */
 NBS_API nbs_status nbs_detect(nbs_context *ctx, const nbs_input *in, const nbs_detect_def *def);
 
 /* The pairs of the last successful detection (NULL and 0 when there are none). */
