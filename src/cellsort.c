@@ -160,7 +160,9 @@
  * once. */
 #define NBS__CS_PAD 16
 /* Sub-cells per cell edge on the x axis: a power of two, so that scaling is exact; fewer
- * when the key would not fit 64 bits otherwise. */
+ * when the key would not fit 64 bits otherwise. (4 and 16 were no different: interleaved,
+ * min of 5, N = 1e6, 8 / 4 / 16 sub-cells, 2D 20.15 / 20.16 / 20.36 ns per element, 3D
+ * 34.20 / 34.21 / 34.29.) */
 #define NBS__CS_FINE_BITS 3
 
 typedef struct nbs__cs nbs__cs;
