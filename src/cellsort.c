@@ -1370,6 +1370,30 @@ static inline void nbs__cs_take(const nbs__cs *c, const nbs__run *run, int32_t p
   nbs__cs_place(c->xs, c->ys, c->zs, c->rs, run->x, run->r, c->dim, p, e);
 }
 
+/* result = the first i of [floor, top) for which below(i) is false (top if none), where
+ * below(i) is true up to some i and false from it on: galloping down from top (1, 2, 4 ...
+ * places), then bisection, so that it takes few steps when the answer is near top, as it is
+ * for each word of a merge from the end (nbs__cs_merge, nbs__cs_core). */
+#define NBS__CS_GALLOP(result, floor, top, below)                                            \
+  do {                                                                                        \
+    int32_t nbs__hi = (top), nbs__lo = (floor);                                               \
+    for (int32_t nbs__step = 1;; nbs__step *= 2) {                                            \
+      if (nbs__hi - nbs__step < (floor)) break;                                               \
+      if (below(nbs__hi - nbs__step)) {                                                       \
+        nbs__lo = nbs__hi - nbs__step + 1;                                                    \
+        break;                                                                                \
+      }                                                                                       \
+      nbs__hi -= nbs__step;                                                                   \
+      if (nbs__step > INT32_MAX / 2) break;                                                   \
+    }                                                                                         \
+    while (nbs__lo < nbs__hi) {                                                               \
+      const int32_t nbs__mid = nbs__lo + (nbs__hi - nbs__lo) / 2;                             \
+      if (below(nbs__mid)) nbs__lo = nbs__mid + 1;                                            \
+      else nbs__hi = nbs__mid;                                                                \
+    }                                                                                         \
+    (result) = nbs__lo;                                                                       \
+  } while (0)
+
 /* The number of kept words among the first p places of the merge of key[0, k) and S[0, m)
  * (both sorted, all words distinct): the i with key[i - 1] < S[p - i] and
  * S[p - i - 1] < key[i], found by bisection (the merge path). */
@@ -1466,22 +1490,11 @@ static void nbs__cs_merge(const nbs__cs *c, const nbs__run *run, int32_t k, cons
       int32_t rr = I1; /* the kept words [I0, rr) are not placed yet */
       for (int64_t j = J1 - 1; j >= J0; j--) {
         const uint64_t w = S[j];
-        /* the kept words above w: [hi, rr) at least, galloping down, then by bisection */
-        int32_t hi = rr, lo = I0;
-        for (int32_t step = 1;; step *= 2) {
-          if (hi - step < I0) break;
-          if (NBS__CS_KEPT(hi - step) < w) {
-            lo = hi - step + 1;
-            break;
-          }
-          hi -= step;
-          if (step > INT32_MAX / 2) break;
-        }
-        while (lo < hi) {
-          const int32_t mid = lo + (hi - lo) / 2;
-          if (NBS__CS_KEPT(mid) < w) lo = mid + 1;
-          else hi = mid;
-        }
+        /* the kept words above w: [lo, rr) */
+        int32_t lo;
+#define NBS__CS_BELOW(i) (NBS__CS_KEPT(i) < w)
+        NBS__CS_GALLOP(lo, I0, rr, NBS__CS_BELOW);
+#undef NBS__CS_BELOW
         /* kept word i has the j + 1 words S[0 .. j] below it: to place i + j + 1 */
         NBS__CS_RUN(lo, rr, j + 1);
         /* the elements taken out are few and anywhere: ask for the coordinates of the one
@@ -1828,22 +1841,11 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
   int32_t r = NC; /* the core words below outlier j + 1 */
   for (int32_t j = NO - 1; j >= 0; j--) {
     const uint64_t o = tk[j];
-    /* the core words [hi, r) are above o; then those below lo are below it */
-    int32_t hi = r, lo_ = 0;
-    for (int32_t step = 1;; step *= 2) {
-      if (hi - step < 0) break;
-      if (NBS__CS_WHOLE(key[hi - step]) < o) {
-        lo_ = hi - step + 1;
-        break;
-      }
-      hi -= step;
-      if (step > INT32_MAX / 2) break;
-    }
-    while (lo_ < hi) {
-      const int32_t mid = lo_ + (hi - lo_) / 2;
-      if (NBS__CS_WHOLE(key[mid]) < o) lo_ = mid + 1;
-      else hi = mid;
-    }
+    /* the core words above o: [lo_, r) */
+    int32_t lo_;
+#define NBS__CS_BELOW(i) (NBS__CS_WHOLE(key[i]) < o)
+    NBS__CS_GALLOP(lo_, 0, r, NBS__CS_BELOW);
+#undef NBS__CS_BELOW
     const int32_t by = j + 1;
     int32_t q = r;
     while (q - lo_ >= 8) {
