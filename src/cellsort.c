@@ -1755,9 +1755,12 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
     }
     for (int a = 0; a < dim; a++) {
       const uint32_t *h = hall + ((size_t)a << hb);
-      int64_t want = 0; /* need, and then all of the sample in the window */
-      for (size_t b = 0; round == 1 && b < bins[a]; b++) want += h[b];
-      if (round == 0) want = need;
+      /* need, then all of the sample within the window */
+      int64_t want = need;
+      if (round == 1) {
+        want = 0;
+        for (size_t b = 0; b < bins[a]; b++) want += h[b];
+      }
       size_t b0 = 0, best0 = 0, best = bins[a];
       int64_t sum = 0;
       for (size_t b1 = 0; b1 < bins[a]; b1++) {
@@ -1838,6 +1841,12 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
 #define NBS__CS_WHOLE(w)                                                                       \
   ((((w) >> eb >> c01) + lo[2]) << s2 | ((((w) >> eb >> c0) & m1) + lo[1]) << s1 |               \
    ((((w) >> eb) & m0) + lo[0]))
+  /* core word w to place p: its key in the whole grid's terms, and its element */
+#define NBS__CS_BACK(p, w)                                                                     \
+  do {                                                                                        \
+    idx[p] = (int32_t)((w) & em);                                                             \
+    key[p] = NBS__CS_WHOLE(w);                                                                \
+  } while (0)
   int32_t r = NC; /* the core words below outlier j + 1 */
   for (int32_t j = NO - 1; j >= 0; j--) {
     const uint64_t o = tk[j];
@@ -1852,16 +1861,12 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
       q -= 8;
       uint64_t w[8];
       for (int l = 0; l < 8; l++) w[l] = key[q + l];
-      for (int l = 0; l < 8; l++) {
-        idx[q + by + l] = (int32_t)(w[l] & em);
-        key[q + by + l] = NBS__CS_WHOLE(w[l]);
-      }
+      for (int l = 0; l < 8; l++) NBS__CS_BACK(q + by + l, w[l]);
     }
     while (q > lo_) {
       q--;
       const uint64_t w = key[q];
-      idx[q + by] = (int32_t)(w & em);
-      key[q + by] = NBS__CS_WHOLE(w);
+      NBS__CS_BACK(q + by, w);
     }
     key[lo_ + j] = o;
     idx[lo_ + j] = ti[j];
@@ -1874,9 +1879,9 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
 #endif
   for (int32_t q = 0; q <= i; q++) {
     const uint64_t w = key[q];
-    idx[q] = (int32_t)(w & em);
-    key[q] = NBS__CS_WHOLE(w);
+    NBS__CS_BACK(q, w);
   }
+#undef NBS__CS_BACK
 #undef NBS__CS_WHOLE
   run->ctx->cs_outliers = NO;
   return true;
