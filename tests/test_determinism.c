@@ -326,14 +326,18 @@ static void test_thread_counts(void) {
  * (NBS__PARTS): the bytes must be those of one thread, from scratch and in a time step
  * (the start from the last order, and its merge of the elements that moved). The settings:
  * two threads of the caller, each detecting with a context of 0 (OpenMP's default), 2 and 3
- * threads, nesting off and then on; and a context of 3 threads called from one thread with
- * OMP_DYNAMIC on. ctest also runs the thread tests under OMP_THREAD_LIMIT=2, where 3 to 8
+ * threads, nesting off and then on; and the same three contexts called from one thread
+ * with OMP_DYNAMIC on. ctest also runs the thread tests under OMP_THREAD_LIMIT=2, where 3 to 8
  * threads asked get 2. Before NBS__PARTS, each of these crashed or gave a wrong error.
- * Without OpenMP there is nothing to test here. */
+ * Without OpenMP the contexts of 0, 2 and 3 threads run from one thread, one thread each. */
 static void test_caller_threads(void) {
 #if defined(_OPENMP)
   const int save_levels = omp_get_max_active_levels();
   const int save_dynamic = omp_get_dynamic();
+  const int settings = 3;
+#else
+  const int settings = 1; /* the contexts of 0, 2 and 3 threads from one thread */
+#endif
   for (int dim = 2; dim <= 3; dim++) {
     scene s = det_scene(DET_QUANTIZED, dim, 60000, dim == 2 ? 300.0 : 45.0, 0.0, 31);
     /* a time step: every 50th element a quarter of a diameter further in x */
@@ -352,15 +356,21 @@ static void test_caller_threads(void) {
     nbs_context_destroy(ctx);
     CHECK_MSG(ref[0].count > (size_t)s.n / 2 && ref[1].count > (size_t)s.n / 2,
               "%dD: only %zu and %zu pairs", dim, ref[0].count, ref[1].count);
-    for (int setting = 0; setting < 3; setting++) {
+    for (int setting = 0; setting < settings; setting++) {
+#if defined(_OPENMP)
       const bool nested = setting < 2;
       omp_set_max_active_levels(setting == 1 ? 2 : 1);
       omp_set_dynamic(setting == 2);
+#else
+      const bool nested = false;
+#endif
       int bad = 0, reused = 0, ran = 0;
+#if defined(_OPENMP)
 #pragma omp parallel num_threads(nested ? 2 : 1) reduction(+ : bad, reused, ran)
+#endif
       {
         const int asked[] = {0, 2, 3};
-        for (int a = nested ? 0 : 2; a < 3; a++) {
+        for (int a = 0; a < 3; a++) {
           nbs_context_def cdef = nbs_default_context_def();
           cdef.threads = asked[a];
           nbs_context *c;
@@ -385,7 +395,7 @@ static void test_caller_threads(void) {
         }
       }
       lists_compared += ran;
-      const int want = nested ? 2 * 3 * 2 : 2;
+      const int want = (nested ? 2 : 1) * 3 * 2;
       CHECK_MSG(bad == 0 && ran == want, "%dD, setting %d: %d of %d detections differ from one "
                 "thread's or failed", dim, setting, bad + (want - ran), want);
       CHECK_MSG(reused == want / 2, "%dD, setting %d: %d of %d time steps started from the "
@@ -396,6 +406,7 @@ static void test_caller_threads(void) {
     free(t.coords);
     scene_free(&s);
   }
+#if defined(_OPENMP)
   omp_set_max_active_levels(save_levels);
   omp_set_dynamic(save_dynamic);
 #endif
