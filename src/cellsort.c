@@ -685,8 +685,9 @@ static size_t nbs__cs_block_avx512(const nbs__cs *c, int32_t c0, int lanes,
  * the same order as the other kernels: for each q, lanes 0-3 then 4-7; then the rotations,
  * whose partner lanes are read from the block stored twice over (lane l + k at l + k).
  * (The AVX-512 kernel's AND after a broadcast load of q's number was slower here: 3D,
- * N = 1e6, NBS_SIMD=avx2, 41.1 -> 42.1 ns per element.) */
-static const int32_t nbs__cs_pack4[16][8] = {
+ * N = 1e6, NBS_SIMD=avx2, 41.1 -> 42.1 ns per element.) The packing permutations
+ * (nbs__pack4, internal.h) serve NBS's AVX2 test too. */
+const int32_t nbs__pack4[16][8] = {
     {0, 0, 0, 0, 0, 0, 0, 0}, {0, 1, 0, 0, 0, 0, 0, 0}, {2, 3, 0, 0, 0, 0, 0, 0},
     {0, 1, 2, 3, 0, 0, 0, 0}, {4, 5, 0, 0, 0, 0, 0, 0}, {0, 1, 4, 5, 0, 0, 0, 0},
     {2, 3, 4, 5, 0, 0, 0, 0}, {0, 1, 2, 3, 4, 5, 0, 0}, {6, 7, 0, 0, 0, 0, 0, 0},
@@ -758,7 +759,7 @@ nbs__cs_block256_body(const nbs__cs *c, int dim, bool radii, bool contacts, int3
                  : (kh);                                                                      \
     const __m256i pr = _mm256_blend_epi32(_mm256_min_epi32(IP##h, IQ),                        \
                                           _mm256_max_epi32(IP##h, IQ), 0xAA);                 \
-    const __m256i pk = _mm256_loadu_si256((const __m256i *)(const void *)nbs__cs_pack4[hit]); \
+    const __m256i pk = _mm256_loadu_si256((const __m256i *)(const void *)nbs__pack4[hit]); \
     _mm256_storeu_si256((__m256i *)(void *)(out + m), _mm256_permutevar8x32_epi32(pr, pk));   \
     m += (size_t)__builtin_popcount(hit);                                                     \
   } while (0)

@@ -330,6 +330,11 @@ size_t nbs__cellsort_bytes(int dim, int32_t n, bool radii, int threads);
  * NBS_SIMD=generic or NBS_SIMD=avx2 asks for a lesser one. */
 enum { NBS__SIMD_GENERIC = 0, NBS__SIMD_AVX512 = 1, NBS__SIMD_AVX2 = 2 };
 int nbs__cellsort_simd(void);
+/* The permutations of 8 int32 (4 pairs) that pack the pairs of a 4-bit mask to the front,
+ * for AVX2, which has no compress: row m moves the pairs of m's set bits, in order. Used by
+ * cellsort's and NBS's AVX2 tests; defined in cellsort.c where the compiler can target
+ * AVX2. */
+extern const int32_t nbs__pack4[16][8];
 size_t nbs__cellsort_partition_min(void);
 
 /* Work-block layouts, for work_kind. */

@@ -612,8 +612,8 @@ static void test_context_sequence(void) {
  * elements into few cells: 2D, 70000 points of radius 0.02 and one of 0.5 (the cells' edge,
  * 1) in a square of side 28, and 66000 of diameter 1 in one of side 60 (16 lists: crowded
  * cells of equal elements touch a hundred each at 32); 3D, 40000 points of radius 0.1 and
- * one of 0.5 in a cube of side 10. The lists each scene's NBS takes are checked, and its contacts against screening's
- * and cellsort's (both checked against direct above). */
+ * one of 0.5 in a cube of side 10. The lists each scene's NBS takes are checked, and its
+ * contacts against screening's and cellsort's (both checked against direct above). */
 static void test_nbs_ways(void) {
   static const struct {
     int dim;

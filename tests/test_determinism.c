@@ -9,7 +9,7 @@
  *     (NBS_PARTITION=never), in order, with 1 to 8 threads;
  *   - across kernels: cellsort's AVX-512 kernel (where the processor has it) and its generic
  *     one (NBS_SIMD=generic), in order, and so does the AVX2 one (NBS_SIMD=avx2); nbs's
- *     AVX-512 test of the gathered candidates and its plain one the same;
+ *     AVX-512 and AVX2 tests of the gathered candidates and its plain one the same;
  *   - across algorithms: after nbs_sort_pairs every algorithm gives the same bytes;
  *   - across orientations: the axis cellsort's rows and nbs's outer lists lie along is
  *     chosen by the cells per axis (nbs__axis_order), which fixes the order of the pairs and
@@ -682,7 +682,8 @@ static void test_kernels(void) {
                   kernels[kn] ? kernels[kn] : "default");
         pair_list_free(&a);
         pair_list_free(&b);
-        /* nbs's test of the gathered candidates (AVX-512 where the processor has it) */
+        /* nbs's test of the gathered candidates (AVX-512 where the processor has it, AVX2
+         * with NBS_SIMD=avx2) */
         st = detect_raw(other, &s, NBS_NBS, (nbs_mode)mode, &a);
         if (st == NBS_OK) {
           ASSERT_OK(detect_raw(generic, &s, NBS_NBS, (nbs_mode)mode, &b));
