@@ -499,6 +499,177 @@ static void test_allocation_failure(void) {
   }
 }
 
+/* A random sequence of contexts and detections under every limit at once, as a simulation
+ * code that sets them might meet them: contexts with 0 to 3 threads, a counting allocator
+ * (with or without realloc), max_pairs of none, a few, or some thousands, and cell budgets
+ * of the default or a few kB; scenes of 2D and 3D, 0 to 3000 elements or 10000 to 20000,
+ * with or without radii, sometimes 1000 times wider, with 1 element in 300 a hundred million
+ * diameters out; time steps; any algorithm, from scratch or not, into the buffer or a
+ * callback that sometimes stops; and, a third of the time, the allocator failing one of the
+ * next few allocations. Each status must be one the API documents for what happened and
+ * mean what it says: NBS_OK with exactly the contacts of a fresh context's direct (or
+ * NBS beyond 4000 elements); NBS_ERR_PAIRS only with a max_pairs below the contacts
+ * and no callback; NBS_ERR_NOMEM only when an allocation failed; NBS_ERR_STOPPED only when
+ * the callback asked; NBS_ERR_BUDGET and NBS_ERR_EXTENT never from auto. Any failure has an
+ * error text and leaves no pairs in the buffer; the context's byte count is the allocator's
+ * live bytes after every detection, its lists are empty, and destroying it frees all. (A
+ * probe like it ran 2256 detections on three other seeds under ASan and found nothing.) */
+typedef struct collected {
+  pair_list l;
+  size_t cap;
+  int batches, stop_at;
+} collected;
+
+static int collect_pairs(void *user, const nbs_pair *pairs, size_t count) {
+  collected *c = user;
+  if (c->l.count + count > c->cap) {
+    c->cap = 2 * (c->l.count + count) + 64;
+    nbs_pair *p = realloc(c->l.p, c->cap * sizeof *p);
+    if (!p) abort();
+    c->l.p = p;
+  }
+  memcpy(c->l.p + c->l.count, pairs, count * sizeof *pairs);
+  c->l.count += count;
+  c->batches++;
+  return c->stop_at > 0 && c->batches >= c->stop_at;
+}
+
+static double limit_unit(uint64_t *state) {
+  *state = *state * 6364136223846793005u + 1442695040888963407u;
+  return (double)(*state >> 11) * 0x1p-53;
+}
+
+static void test_limit_sequence(void) {
+  const int64_t most = 20000;
+  double *x = malloc((size_t)most * 3 * sizeof *x), *r = malloc((size_t)most * sizeof *r);
+  ASSERT_TRUE(x && r);
+  uint64_t state = 2718;
+  int tally[NBS_ERR_BUSY + 1] = {0};
+  collected col = {{NULL, 0}, 0, 0, 0};
+  for (int it = 0; it < 60 && !test_failures; it++) {
+    test_alloc ta = {0, 0, 0, -1, 0, limit_unit(&state) < 0.5};
+    nbs_context_def cdef = nbs_default_context_def();
+    cdef.allocator = test_allocator(&ta);
+    cdef.threads = (int)(limit_unit(&state) * 4);
+    const double u = limit_unit(&state);
+    cdef.max_pairs = u < 0.25 ? 0 : u < 0.5 ? (size_t)(limit_unit(&state) * 50)
+                                            : (size_t)(limit_unit(&state) * 20000);
+    if (limit_unit(&state) < 0.3) cdef.cell_budget = (size_t)(limit_unit(&state) * 100000);
+    nbs_context *ctx;
+    ASSERT_OK(nbs_context_create(&cdef, &ctx));
+    const int dim = limit_unit(&state) < 0.5 ? 2 : 3;
+    const int64_t n = limit_unit(&state) < 0.15 ? 10000 + (int64_t)(limit_unit(&state) * 10000)
+                                                : (int64_t)(limit_unit(&state) * 3000);
+    const bool radii = limit_unit(&state) < 0.3;
+    const double box = pow((double)(n + 1) / (0.2 + limit_unit(&state)), 1.0 / dim) *
+                       (limit_unit(&state) < 0.2 ? 1000.0 : 1.0);
+    for (int64_t k = 0; k < n * dim; k++) {
+      x[k] = limit_unit(&state) * box + (limit_unit(&state) < 1.0 / 300 ? 1e8 : 0.0);
+    }
+    for (int64_t k = 0; k < n; k++) r[k] = 0.1 + 0.4 * limit_unit(&state);
+    scene s;
+    memset(&s, 0, sizeof s);
+    s.dim = dim;
+    s.n = n;
+    s.coords = x;
+    s.radii = radii ? r : NULL;
+    s.diameter = 1.0;
+    nbs_input in = scene_input(&s);
+    for (int step = 0; step < 5 && !test_failures; step++) {
+      if (step > 0 && limit_unit(&state) < 0.5) {
+        for (int64_t k = 0; k < n * dim; k++) x[k] += 1e-3 * (limit_unit(&state) - 0.5);
+      }
+      pair_list ref;
+      {
+        nbs_context *rc;
+        ASSERT_OK(nbs_context_create(NULL, &rc));
+        ASSERT_OK(detect_sorted(rc, &s, n > 4000 ? NBS_NBS : NBS_DIRECT,
+                                NBS_MODE_CONTACTS, &ref));
+        nbs_context_destroy(rc);
+      }
+      nbs_detect_def def = nbs_default_detect_def();
+      def.algorithm = (nbs_algorithm)(limit_unit(&state) * NBS_ALGORITHM_COUNT);
+      if (def.algorithm == NBS_DIRECT && n > 4000) def.algorithm = NBS_AUTO;
+      const bool callback = limit_unit(&state) < 0.3;
+      col.l.count = 0;
+      col.batches = 0;
+      col.stop_at = limit_unit(&state) < 0.3 ? 1 + (int)(limit_unit(&state) * 3) : 0;
+      if (callback) {
+        def.callback = collect_pairs;
+        def.user = &col;
+      }
+      def.sorted = !callback;
+      def.fresh = limit_unit(&state) < 0.25;
+      const bool fail = limit_unit(&state) < 0.3;
+      ta.fail_at = fail ? ta.calls + (long)(limit_unit(&state) * 6) : -1;
+      ta.failures = 0;
+      const nbs_status st = nbs_detect(ctx, &in, &def);
+      ta.fail_at = -1;
+      tally[st]++;
+      pair_list got;
+      got.p = (nbs_pair *)nbs_pairs(ctx, &got.count);
+      /* the buffer holds no pairs after an error, nor after a detection with a callback */
+      CHECK_MSG((st == NBS_OK && !callback) || got.count == 0,
+                "context %d detection %d: %s, %zu pairs in the buffer", it, step,
+                nbs_status_name(st), got.count);
+      if (callback) {
+        nbs_sort_pairs(col.l.p, col.l.count);
+        got = col.l;
+      }
+      const char *name = nbs_algorithm_name(def.algorithm);
+      char what[96];
+      snprintf(what, sizeof what, "context %d detection %d: %s, %dD, n = %lld%s%s", it, step,
+               name, dim, (long long)n, radii ? ", radii" : "", callback ? ", callback" : "");
+      switch (st) {
+      case NBS_OK:
+        CHECK_MSG(pair_lists_equal(&got, &ref), "%s: %zu pairs of %zu", what, got.count,
+                  ref.count);
+        CHECK_MSG(!callback || !col.stop_at || col.batches < col.stop_at,
+                  "%s: the callback asked to stop", what);
+        break;
+      case NBS_ERR_PAIRS:
+        CHECK_MSG(!callback && cdef.max_pairs && ref.count > cdef.max_pairs,
+                  "%s: NBS_ERR_PAIRS with max_pairs %zu, %zu contacts", what, cdef.max_pairs,
+                  ref.count);
+        break;
+      case NBS_ERR_NOMEM:
+        CHECK_MSG(ta.failures > 0, "%s: NBS_ERR_NOMEM with no allocation failed", what);
+        break;
+      case NBS_ERR_STOPPED:
+        CHECK_MSG(callback && col.stop_at, "%s: NBS_ERR_STOPPED unasked", what);
+        break;
+      case NBS_ERR_BUDGET:
+      case NBS_ERR_EXTENT:
+        CHECK_MSG(def.algorithm != NBS_AUTO, "%s: auto refused (%s)", what,
+                  nbs_context_error(ctx));
+        break;
+      default:
+        CHECK_MSG(false, "%s: status %s (%s)", what, nbs_status_name(st),
+                  nbs_context_error(ctx));
+      }
+      CHECK_MSG(st == NBS_OK || nbs_context_error(ctx)[0] != '\0', "%s: %s without a text", what,
+                nbs_status_name(st));
+      CHECK_MSG(nbs_context_bytes(ctx) == ta.live_bytes, "%s: %zu bytes held, %zu live", what,
+                nbs_context_bytes(ctx), ta.live_bytes);
+      CHECK_TRUE(nbs__heads_empty(ctx));
+      pair_list_free(&ref);
+    }
+    nbs_context_destroy(ctx);
+    CHECK_EQ(ta.live, 0);
+    CHECK_EQ(ta.live_bytes, 0);
+  }
+  /* the sequence reaches every status it checks */
+  const nbs_status reached[] = {NBS_OK,          NBS_ERR_PAIRS,  NBS_ERR_NOMEM,
+                                NBS_ERR_STOPPED, NBS_ERR_BUDGET, NBS_ERR_EXTENT};
+  for (size_t k = 0; k < sizeof reached / sizeof *reached; k++) {
+    CHECK_MSG(tally[reached[k]] > 0, "no detection of the sequence gave %s",
+              nbs_status_name(reached[k]));
+  }
+  free(col.l.p);
+  free(x);
+  free(r);
+}
+
 int main(int argc, char **argv) {
   static const test_case tests[] = {
       {"null_and_ranges", test_null_and_ranges},
@@ -509,6 +680,7 @@ int main(int argc, char **argv) {
       {"reentry", test_reentry},
       {"allocator_def", test_allocator_def},
       {"allocation_failure", test_allocation_failure},
+      {"limit_sequence", test_limit_sequence},
   };
   return test_main(argc, argv, tests, sizeof tests / sizeof *tests);
 }
