@@ -69,15 +69,16 @@
  *      strip along y 33.8 -> 17.9, 15.0 along x; interleaved, min of 3).
  * Time steps. A simulation detects the same elements every step, and they move little in a
  * step. The context keeps the cell order of the last detection (the sorted packed words,
- * ctx->cs_order_n), and a detection of the same n starts from it (nbs__cs_warm): one pass
- * reads the elements in that order, as the gather does, computes each one's key again and
- * keeps in place the elements whose key did not change; the few that changed place are
- * sorted again and merged back. That replaces steps 1-3 (sort and gather) by one pass like
- * the gather. The result, sorted by the whole word, is the order of a sort from scratch,
- * so nothing else differs. For the keys to stay put, the grid's origin is a point of a fixed
- * lattice of spacing the edge below the lowest coordinate (nbs__cs_anchor), not the lowest
- * coordinate itself. Measured (3D, N = 1e6, fraction 0.5, random order, one thread, min of
- * 5 processes, ns per element; nbs_bench --move D against --fresh):
+ * ctx->cs_order_n), and a detection of the same n (and the same element bits in its words,
+ * ctx->cs_order_eb) starts from it (nbs__cs_warm): one pass reads the elements in that
+ * order, as the gather does, computes each one's key again and keeps in place the elements
+ * whose key did not change; the few that changed place are sorted again and merged back.
+ * That replaces steps 1-3 (sort and gather) by one pass like the gather. The result, sorted
+ * by the whole word, is the order of a sort from scratch, so nothing else differs. For the
+ * keys to stay put, the grid's origin is a point of a fixed lattice of spacing the edge
+ * below the lowest coordinate (nbs__cs_anchor), not the lowest coordinate itself. Measured
+ * (3D, N = 1e6, fraction 0.5, random order, one thread, min of 5 processes, ns per element;
+ * nbs_bench --move D against --fresh):
  * from scratch 32.0; unmoved 28.8; steps of up to 1e-4, 1e-3, 1e-2 diameters per axis
  * 29.1, 29.8, 31.8 (450, 5,000, 50,000 elements sorted again). 2D: 16.1; 11.5; 13.2 at
  * 1e-3. With two threads (both the pass and the merge shared), 3D at 1e-3: 21.4 -> 18.7.
@@ -188,7 +189,8 @@ struct nbs__cs {
   int bx, by;     /* bits of the key for the x sub-cell and for iy (iz takes the rest) */
   int ks;         /* where the key starts in a word of key[]: the element's bits when
                    * packed, else 0 */
-  uint32_t imask; /* the element's bits in the low half of a word (all ones unpacked) */
+  uint32_t imask; /* the element's bits in the low half of a word (all ones where that
+                   * is the element alone: unpacked, or packed with 32 element bits) */
   uint64_t fine;  /* sub-cells per cell edge on x */
 };
 
@@ -578,8 +580,8 @@ static size_t nbs__cs_block_generic(const nbs__cs *c, int32_t c0, int lanes,
  * 34.8: the adders are not what bounds the steps. The kernel called directly from the sweep
  * compiled for it (a constant, inlined, not a pointer): 33.2 / 33.4. */
 static inline __attribute__((always_inline)) NBS__CS_AVX512_TARGET size_t
-nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int32_t c0,
-                      int lanes, const nbs__cs_ranges *rg, nbs_pair *out) {
+nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, bool whole,
+                      int32_t c0, int lanes, const nbs__cs_ranges *rg, nbs_pair *out) {
   const double *X = c->xs, *Y = c->ys, *Z = c->zs, *R = c->rs;
   const int32_t *ids = c->ids;
   const size_t istep = (size_t)c->istep;
@@ -623,8 +625,10 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int3
       lim = _mm512_mul_pd(rr, rr);                                                            \
     }                                                                                         \
     const __mmask8 hit = contacts ? _mm512_cmp_pd_mask(d, lim, _CMP_LE_OQ) : im;              \
-    const __m512i IQ = _mm512_and_si512(                                                      \
-        _mm512_broadcastd_epi32(_mm_cvtsi32_si128(ids[(size_t)(q)*istep])), IMASK);           \
+    const __m512i IQ =                                                                        \
+        whole ? _mm512_set1_epi32(ids[(size_t)(q)*istep])                                     \
+              : _mm512_and_si512(                                                             \
+                    _mm512_broadcastd_epi32(_mm_cvtsi32_si128(ids[(size_t)(q)*istep])), IMASK); \
     const __m512i pr = _mm512_mask_max_epi32(_mm512_min_epi32(IP2, IQ), 0xAAAA, IP2, IQ);     \
     _mm512_storeu_si512((void *)(out + m), _mm512_maskz_compress_epi64(hit, pr));             \
     m += (size_t)__builtin_popcount(hit);                                                     \
@@ -676,7 +680,11 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int3
 NBS__CS_AVX512_TARGET
 static size_t nbs__cs_block_avx512(const nbs__cs *c, int32_t c0, int lanes,
                                    const nbs__cs_ranges *rg, nbs_pair *out) {
-  return NBS__CS_DISPATCH(nbs__cs_block512_body, c, c0, lanes, rg, out);
+  /* whole: q's number is the whole int32 it reads (imask all ones), no AND */
+  if (c->imask == UINT32_MAX) {
+    return NBS__CS_DISPATCH(nbs__cs_block512_body, c, true, c0, lanes, rg, out);
+  }
+  return NBS__CS_DISPATCH(nbs__cs_block512_body, c, false, c0, lanes, rg, out);
 }
 
 /* The AVX2 kernel, for processors without AVX-512: the block's 8 lanes in two registers of
@@ -2359,8 +2367,15 @@ nbs_status nbs__cellsort(nbs__run *run) {
    * the bits of n - 1: the sort then moves 8 bytes per element and pass instead of 12, and
    * the sweep reads one array for both. At most 63 bits in all, so that the padding after
    * the end (all ones) stays above every bound "up to a key". The x sub-cells give up bits
-   * for it (a sparse domain, where they matter little, is where the cells need many). */
-  const int cell_bits = bx + by + bz, eb = nbs__bits((uint64_t)n);
+   * for it (a sparse domain, where they matter little, is where the cells need many).
+   * Where the whole key fits 31 bits (every uniform scene of the benchmarks, up to N = 1e8
+   * in 3D), eb is 32: the low half of the word is then the element alone, and the AVX-512
+   * kernel reads it without a mask (one instruction of its 20 per step: 3D, N = 1e6,
+   * interleaved, min of 4-5, 34.3 -> 33.5 ns per element, time steps of 1e-3 35.1 -> 34.4;
+   * 2D the same, 20.4 / 20.6, where the kernel is a smaller part). The sort's digits are
+   * the key's either way; a start from the last order needs the same eb (cs_order_eb). */
+  const int cell_bits = bx + by + bz;
+  const int eb = cell_bits + NBS__CS_FINE_BITS <= 31 ? 32 : nbs__bits((uint64_t)n);
   const bool packed = cell_bits + eb <= 63;
   const int spare = packed ? 63 - eb - cell_bits : 64 - cell_bits;
   if (fine_bits > spare) fine_bits = spare;
@@ -2377,7 +2392,8 @@ nbs_status nbs__cellsort(nbs__run *run) {
   const size_t bytes = nbs__cs_layout(dim, n, run->r != NULL, threads, at, &stride);
   NBS__TRY(nbs__work_reserve(ctx, bytes));
   /* the last detection's cell order, when it is there (a new block holds none) */
-  const bool had_order = ctx->work_kind == NBS__WORK_CELLSORT && ctx->cs_order_n == n;
+  const bool had_order = ctx->work_kind == NBS__WORK_CELLSORT && ctx->cs_order_n == n &&
+                         ctx->cs_order_eb == eb;
   ctx->work_kind = NBS__WORK_CELLSORT;
   ctx->cs_order_n = 0; /* no order until this detection's is complete */
   ctx->cs_outliers = -1;
@@ -2409,7 +2425,7 @@ nbs_status nbs__cellsort(nbs__run *run) {
   c.by = by;
   c.fine = (uint64_t)1 << fine_bits;
   c.ks = packed ? eb : 0;
-  c.imask = packed ? (uint32_t)(((uint64_t)1 << eb) - 1) : UINT32_MAX;
+  c.imask = packed && eb < 32 ? (uint32_t)(((uint64_t)1 << eb) - 1) : UINT32_MAX;
   run->work_bytes = bytes;
 
   nbs__cs_keying kg;
@@ -2442,7 +2458,10 @@ nbs_status nbs__cellsort(nbs__run *run) {
                         at[1] - at[0]);
   }
   for (size_t t = nn; t < nn + NBS__CS_PAD; t++) c.key[t] = UINT64_MAX;
-  if (packed) ctx->cs_order_n = n;
+  if (packed) {
+    ctx->cs_order_n = n;
+    ctx->cs_order_eb = eb;
+  }
 
   /* 4. sweep: thread t takes the elements [n t / T, n (t + 1) / T) of the cell order */
   nbs__sink sinks[NBS__THREADS_MAX];

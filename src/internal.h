@@ -99,8 +99,11 @@ struct nbs_context {
   size_t nbs_block_size;
   /* cellsort's cell order: when work_kind is NBS__WORK_CELLSORT and cs_order_n is n (> 0),
    * the work block's key array holds the packed words (key << eb | element) of the last
-   * detection of n elements, sorted: the next detection may start from it (cellsort.c). */
+   * detection of n elements, sorted: the next detection may start from it (cellsort.c),
+   * where its words have the same element bits, cs_order_eb (they depend on the cells as
+   * well as on n). */
   int32_t cs_order_n;
+  int cs_order_eb;
   /* After a start from it fails (too many elements changed place), the next cs_warm_wait
    * detections sort from scratch without trying: 2, 4, ... 64 after 1, 2, ... 6 failures in
    * a row (cs_warm_fails), so that steps that keep failing stop paying for the try. */

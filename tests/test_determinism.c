@@ -644,6 +644,24 @@ static void test_time_steps(void) {
     snprintf(what, sizeof what, "dimension and radii, step %zu", k);
     det_step(ctx, ref, seq[k], NBS_CELLSORT, NBS_MODE_CONTACTS, false, &st, what);
   }
+  /* The element bits of the packed words change with the same n: 32 where the key fits 31
+   * bits (s3: 23 diameters a side), the bits of n - 1 where it does not (wide: 64 times
+   * wider, 33 bits of cells). A start from the last order read its words with this
+   * detection's element bits, and crashed on the change (element numbers of 2^32 - 1 and
+   * more): the order must not be reused across it, and is reused again after it. */
+  scene wide = det_scene(DET_UNIFORM, 3, 12000, 23.0 * 64, 0.0, 44);
+  const scene *bits[] = {&s3, &wide, &wide, &s3, &s3, &wide};
+  const int reused[] = {0, 0, 1, 0, 1, 0};
+  nbs_context *bctx; /* a context of its own: no wait from failed starts before */
+  ASSERT_OK(nbs_context_create(NULL, &bctx));
+  for (size_t k = 0; k < sizeof bits / sizeof *bits && !test_failures; k++) {
+    char what[64];
+    snprintf(what, sizeof what, "element bits, step %zu", k);
+    det_step(bctx, ref, bits[k], NBS_CELLSORT, NBS_MODE_CONTACTS, false, &st, what);
+    CHECK_MSG(st.reused_order == reused[k], "%s: reused %d", what, st.reused_order);
+  }
+  nbs_context_destroy(bctx);
+  scene_free(&wide);
   scene_free(&s3);
   scene_free(&s2);
   scene_free(&sr);
