@@ -892,6 +892,11 @@ static nbs_status nbs__cs_offer_slices(const nbs__cs *c, nbs__sink *s, int32_t c
   return NBS_OK;
 }
 
+/* The ranges' elements are summed here in a loop that GCC 12 vectorizes, loading q0 and q1
+ * as vectors just after the sweep stored them one by one (a load that store forwarding
+ * cannot serve). Tried and left out: the sum kept by the sweep as it finds the ranges, no
+ * loop: 3D, N = 1e6, interleaved, min of 6, 33.7 -> 33.2 ns per element, but the huge
+ * domain 38.8 -> 39.7 (2D 24.6 -> 24.2). */
 static inline __attribute__((always_inline)) nbs_status
 nbs__cs_offer(const nbs__cs *c, nbs__sink *s, int32_t c0, int lanes, const nbs__cs_ranges *rg) {
   size_t total = 0;
