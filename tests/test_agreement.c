@@ -278,10 +278,6 @@ static void test_threads(void) {
 
 /* A number in [0, 1) from a 64-bit linear congruential generator, for the scenes built by
  * hand below. */
-static double next_unit(uint64_t *state) {
-  *state = *state * 6364136223846793005u + 1442695040888963407u;
-  return (double)(*state >> 11) * 0x1p-53;
-}
 
 /* cellsort's radix sort within a bucket of the top digit skips a digit that every key of the
  * bucket shares, and then copies the bucket to where the sort leaves it (nbs__radix_local).
@@ -302,7 +298,7 @@ static void test_shared_digit(void) {
   for (int j = 0; j < rows; j++) {
     for (int k = 0; k < per_row; k++) {
       const int64_t e = (int64_t)j * per_row + k;
-      s.coords[2 * e] = 13.0 * next_unit(&state);
+      s.coords[2 * e] = 13.0 * test_unit(&state);
       s.coords[2 * e + 1] = 16.0 * j;
     }
   }
@@ -343,8 +339,8 @@ static void test_bucket_scratch(void) {
   s.coords = malloc((size_t)s.n * 2 * sizeof *s.coords);
   uint64_t state = 777;
   for (int64_t e = 0; e < s.n; e++) {
-    const double u = next_unit(&state);
-    const double v = next_unit(&state);
+    const double u = test_unit(&state);
+    const double v = test_unit(&state);
     if (e < fat) { /* the first bucket: its first rows, x across the domain */
       s.coords[2 * e] = 100.0 * u;
       s.coords[2 * e + 1] = 8.0 * v;
@@ -382,11 +378,11 @@ static int64_t core_scene(int dim, int64_t n, double f, double h, double far_x, 
   for (int64_t e = 0; e < n; e++) {
     double *x = s->coords + e * dim;
     if (e < block + tail) {
-      x[0] = e < block ? bx * next_unit(&state) : -tx * next_unit(&state);
-      for (int a = 1; a < dim; a++) x[a] = h * next_unit(&state);
+      x[0] = e < block ? bx * test_unit(&state) : -tx * test_unit(&state);
+      for (int a = 1; a < dim; a++) x[a] = h * test_unit(&state);
     } else if ((e - block - tail) % 2 == 0) {
-      x[0] = far_x > 0.0 ? (next_unit(&state) < 0.5 ? -far_x : far_x) : bx * next_unit(&state);
-      for (int a = 1; a < dim; a++) x[a] = next_unit(&state) < 0.5 ? -far_yz : far_yz;
+      x[0] = far_x > 0.0 ? (test_unit(&state) < 0.5 ? -far_x : far_x) : bx * test_unit(&state);
+      for (int a = 1; a < dim; a++) x[a] = test_unit(&state) < 0.5 ? -far_yz : far_yz;
       x[dim - 1] += 5.0 * (double)(e - block - tail); /* the pairs apart from each other */
     } else {
       for (int a = 0; a < dim; a++) x[a] = x[a - dim];
@@ -394,7 +390,7 @@ static int64_t core_scene(int dim, int64_t n, double f, double h, double far_x, 
     }
   }
   for (int64_t e = n - 1; e > 0; e--) {
-    const int64_t o = (int64_t)(next_unit(&state) * (double)(e + 1));
+    const int64_t o = (int64_t)(test_unit(&state) * (double)(e + 1));
     for (int a = 0; a < dim; a++) {
       const double t = s->coords[e * dim + a];
       s->coords[e * dim + a] = s->coords[o * dim + a];
@@ -423,8 +419,8 @@ static void short_rows_scene(int64_t chain, bool radii, uint64_t seed, scene *s)
   uint64_t state = seed;
   int64_t e = 0;
   for (int64_t k = 0; k < chain; k++, e++) {
-    s->coords[2 * e] = 0.4 * (double)k + 0.1 * (next_unit(&state) - 0.5);
-    s->coords[2 * e + 1] = 0.4 * (double)k + 0.1 * (next_unit(&state) - 0.5);
+    s->coords[2 * e] = 0.4 * (double)k + 0.1 * (test_unit(&state) - 0.5);
+    s->coords[2 * e + 1] = 0.4 * (double)k + 0.1 * (test_unit(&state) - 0.5);
     if (k % 97 == 0) {
       s->coords[2 * (e + 1)] = s->coords[2 * e];
       s->coords[2 * (e + 1) + 1] = s->coords[2 * e + 1];
@@ -435,15 +431,15 @@ static void short_rows_scene(int64_t chain, bool radii, uint64_t seed, scene *s)
     const double at = 0.4 * (double)(l * 1250);
     for (int64_t k = 0; k < line; k++, e++) {
       s->coords[2 * e] = at - 30.0 + 0.3 * (double)k;
-      s->coords[2 * e + 1] = at + 0.5 + 0.01 * next_unit(&state);
+      s->coords[2 * e + 1] = at + 0.5 + 0.01 * test_unit(&state);
     }
   }
   if (e != s->n) abort();
   if (radii) {
-    for (int64_t k = 0; k < s->n; k++) s->radii[k] = 0.15 + 0.35 * next_unit(&state);
+    for (int64_t k = 0; k < s->n; k++) s->radii[k] = 0.15 + 0.35 * test_unit(&state);
   }
   for (int64_t k = s->n - 1; k > 0; k--) {
-    const int64_t o = (int64_t)(next_unit(&state) * (double)(k + 1));
+    const int64_t o = (int64_t)(test_unit(&state) * (double)(k + 1));
     for (int a = 0; a < 2; a++) {
       const double t = s->coords[2 * k + a];
       s->coords[2 * k + a] = s->coords[2 * o + a];
@@ -557,31 +553,25 @@ static void test_context_sequence(void) {
   bool radii = false;
   int checked = 0;
   for (int it = 0; it < 250; it++) {
-    const double u = next_unit(&state);
+    const double u = test_unit(&state);
     if (it == 0 || u < 0.2) { /* a new scene */
-      dim = next_unit(&state) < 0.5 ? 2 : 3;
-      n = next_unit(&state) < 0.15 ? 45000 + (int64_t)(next_unit(&state) * 10000)
-                                    : 1 + (int64_t)(next_unit(&state) * 3000);
-      radii = next_unit(&state) < 0.3;
-      const double box = pow((double)n / 0.4, 1.0 / dim) * (next_unit(&state) < 0.2 ? 100 : 1);
-      const bool far = next_unit(&state) < 0.3;
+      dim = test_unit(&state) < 0.5 ? 2 : 3;
+      n = test_unit(&state) < 0.15 ? 45000 + (int64_t)(test_unit(&state) * 10000)
+                                    : 1 + (int64_t)(test_unit(&state) * 3000);
+      radii = test_unit(&state) < 0.3;
+      const double box = pow((double)n / 0.4, 1.0 / dim) * (test_unit(&state) < 0.2 ? 100 : 1);
+      const bool far = test_unit(&state) < 0.3;
       for (int64_t k = 0; k < n * dim; k++) {
-        x[k] = next_unit(&state) * box + (far && next_unit(&state) < 0.02 ? 1e9 : 0.0);
+        x[k] = test_unit(&state) * box + (far && test_unit(&state) < 0.02 ? 1e9 : 0.0);
       }
-      for (int64_t k = 0; k < n; k++) r[k] = 0.1 + 0.4 * next_unit(&state);
+      for (int64_t k = 0; k < n; k++) r[k] = 0.1 + 0.4 * test_unit(&state);
     } else if (u < 0.7) { /* a time step */
-      const double d = next_unit(&state) < 0.5 ? 1e-3 : 0.3;
-      for (int64_t k = 0; k < n * dim; k++) x[k] += d * (next_unit(&state) - 0.5);
+      const double d = test_unit(&state) < 0.5 ? 1e-3 : 0.3;
+      for (int64_t k = 0; k < n * dim; k++) x[k] += d * (test_unit(&state) - 0.5);
     }
-    nbs_algorithm a = (nbs_algorithm)(next_unit(&state) * NBS_ALGORITHM_COUNT);
+    nbs_algorithm a = (nbs_algorithm)(test_unit(&state) * NBS_ALGORITHM_COUNT);
     if (a == NBS_DIRECT && n > 5000) a = NBS_AUTO;
-    scene s;
-    memset(&s, 0, sizeof s);
-    s.dim = dim;
-    s.n = n;
-    s.coords = x;
-    s.radii = radii ? r : NULL;
-    s.diameter = 1.0;
+    scene s = scene_view(dim, n, x, radii ? r : NULL);
     pair_list got, ref;
     nbs_context *rc;
     ASSERT_OK(nbs_context_create(NULL, &rc));
@@ -633,7 +623,7 @@ static void test_nbs_ways(void) {
     s.radii = wc[c].r > 0 ? malloc((size_t)s.n * sizeof *s.radii) : NULL;
     ASSERT_TRUE(s.coords != NULL && (wc[c].r == 0 || s.radii != NULL));
     uint64_t state = 4242 + c;
-    for (int64_t e = 0; e < s.n * dim; e++) s.coords[e] = wc[c].side * next_unit(&state);
+    for (int64_t e = 0; e < s.n * dim; e++) s.coords[e] = wc[c].side * test_unit(&state);
     if (s.radii) {
       for (int64_t e = 0; e < s.n; e++) s.radii[e] = e == 0 ? 0.5 : wc[c].r;
     }

@@ -534,11 +534,6 @@ static int collect_pairs(void *user, const nbs_pair *pairs, size_t count) {
   return c->stop_at > 0 && c->batches >= c->stop_at;
 }
 
-static double limit_unit(uint64_t *state) {
-  *state = *state * 6364136223846793005u + 1442695040888963407u;
-  return (double)(*state >> 11) * 0x1p-53;
-}
-
 static void test_limit_sequence(void) {
   const int64_t most = 20000;
   double *x = malloc((size_t)most * 3 * sizeof *x), *r = malloc((size_t)most * sizeof *r);
@@ -547,37 +542,31 @@ static void test_limit_sequence(void) {
   int tally[NBS_ERR_BUSY + 1] = {0};
   collected col = {{NULL, 0}, 0, 0, 0};
   for (int it = 0; it < 60 && !test_failures; it++) {
-    test_alloc ta = {0, 0, 0, -1, 0, limit_unit(&state) < 0.5};
+    test_alloc ta = {0, 0, 0, -1, 0, test_unit(&state) < 0.5};
     nbs_context_def cdef = nbs_default_context_def();
     cdef.allocator = test_allocator(&ta);
-    cdef.threads = (int)(limit_unit(&state) * 4);
-    const double u = limit_unit(&state);
-    cdef.max_pairs = u < 0.25 ? 0 : u < 0.5 ? (size_t)(limit_unit(&state) * 50)
-                                            : (size_t)(limit_unit(&state) * 20000);
-    if (limit_unit(&state) < 0.3) cdef.cell_budget = (size_t)(limit_unit(&state) * 100000);
+    cdef.threads = (int)(test_unit(&state) * 4);
+    const double u = test_unit(&state);
+    cdef.max_pairs = u < 0.25 ? 0 : u < 0.5 ? (size_t)(test_unit(&state) * 50)
+                                            : (size_t)(test_unit(&state) * 20000);
+    if (test_unit(&state) < 0.3) cdef.cell_budget = (size_t)(test_unit(&state) * 100000);
     nbs_context *ctx;
     ASSERT_OK(nbs_context_create(&cdef, &ctx));
-    const int dim = limit_unit(&state) < 0.5 ? 2 : 3;
-    const int64_t n = limit_unit(&state) < 0.15 ? 10000 + (int64_t)(limit_unit(&state) * 10000)
-                                                : (int64_t)(limit_unit(&state) * 3000);
-    const bool radii = limit_unit(&state) < 0.3;
-    const double box = pow((double)(n + 1) / (0.2 + limit_unit(&state)), 1.0 / dim) *
-                       (limit_unit(&state) < 0.2 ? 1000.0 : 1.0);
+    const int dim = test_unit(&state) < 0.5 ? 2 : 3;
+    const int64_t n = test_unit(&state) < 0.15 ? 10000 + (int64_t)(test_unit(&state) * 10000)
+                                                : (int64_t)(test_unit(&state) * 3000);
+    const bool radii = test_unit(&state) < 0.3;
+    const double box = pow((double)(n + 1) / (0.2 + test_unit(&state)), 1.0 / dim) *
+                       (test_unit(&state) < 0.2 ? 1000.0 : 1.0);
     for (int64_t k = 0; k < n * dim; k++) {
-      x[k] = limit_unit(&state) * box + (limit_unit(&state) < 1.0 / 300 ? 1e8 : 0.0);
+      x[k] = test_unit(&state) * box + (test_unit(&state) < 1.0 / 300 ? 1e8 : 0.0);
     }
-    for (int64_t k = 0; k < n; k++) r[k] = 0.1 + 0.4 * limit_unit(&state);
-    scene s;
-    memset(&s, 0, sizeof s);
-    s.dim = dim;
-    s.n = n;
-    s.coords = x;
-    s.radii = radii ? r : NULL;
-    s.diameter = 1.0;
+    for (int64_t k = 0; k < n; k++) r[k] = 0.1 + 0.4 * test_unit(&state);
+    scene s = scene_view(dim, n, x, radii ? r : NULL);
     nbs_input in = scene_input(&s);
     for (int step = 0; step < 5 && !test_failures; step++) {
-      if (step > 0 && limit_unit(&state) < 0.5) {
-        for (int64_t k = 0; k < n * dim; k++) x[k] += 1e-3 * (limit_unit(&state) - 0.5);
+      if (step > 0 && test_unit(&state) < 0.5) {
+        for (int64_t k = 0; k < n * dim; k++) x[k] += 1e-3 * (test_unit(&state) - 0.5);
       }
       pair_list ref;
       {
@@ -588,20 +577,20 @@ static void test_limit_sequence(void) {
         nbs_context_destroy(rc);
       }
       nbs_detect_def def = nbs_default_detect_def();
-      def.algorithm = (nbs_algorithm)(limit_unit(&state) * NBS_ALGORITHM_COUNT);
+      def.algorithm = (nbs_algorithm)(test_unit(&state) * NBS_ALGORITHM_COUNT);
       if (def.algorithm == NBS_DIRECT && n > 4000) def.algorithm = NBS_AUTO;
-      const bool callback = limit_unit(&state) < 0.3;
+      const bool callback = test_unit(&state) < 0.3;
       col.l.count = 0;
       col.batches = 0;
-      col.stop_at = limit_unit(&state) < 0.3 ? 1 + (int)(limit_unit(&state) * 3) : 0;
+      col.stop_at = test_unit(&state) < 0.3 ? 1 + (int)(test_unit(&state) * 3) : 0;
       if (callback) {
         def.callback = collect_pairs;
         def.user = &col;
       }
       def.sorted = !callback;
-      def.fresh = limit_unit(&state) < 0.25;
-      const bool fail = limit_unit(&state) < 0.3;
-      ta.fail_at = fail ? ta.calls + (long)(limit_unit(&state) * 6) : -1;
+      def.fresh = test_unit(&state) < 0.25;
+      const bool fail = test_unit(&state) < 0.3;
+      ta.fail_at = fail ? ta.calls + (long)(test_unit(&state) * 6) : -1;
       ta.failures = 0;
       const nbs_status st = nbs_detect(ctx, &in, &def);
       ta.fail_at = -1;

@@ -15,6 +15,22 @@ nbs_input scene_input(const scene *s) {
   return in;
 }
 
+scene scene_view(int dim, int64_t n, double *coords, double *radii) {
+  scene s;
+  memset(&s, 0, sizeof s);
+  s.dim = dim;
+  s.n = n;
+  s.coords = coords;
+  s.radii = radii;
+  s.diameter = 1.0;
+  return s;
+}
+
+double test_unit(uint64_t *state) {
+  *state = *state * 6364136223846793005u + 1442695040888963407u;
+  return (double)(*state >> 11) * 0x1p-53;
+}
+
 scene test_scene(scene_kind kind, int dim, int64_t n, double fraction) {
   scene_def def = scene_default_def();
   def.kind = kind;

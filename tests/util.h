@@ -31,6 +31,10 @@ bool pair_lists_equal(const pair_list *a, const pair_list *b);
 /* True when every pair of sub is in super (both sorted). */
 bool pair_list_contains(const pair_list *super, const pair_list *sub);
 nbs_input scene_input(const scene *s);
+/* A scene of the caller's arrays (diameter 1), which it keeps: not for scene_free. */
+scene scene_view(int dim, int64_t n, double *coords, double *radii);
+/* The next of a reproducible sequence of numbers in [0, 1) (a 64-bit LCG's top 53 bits). */
+double test_unit(uint64_t *state);
 /* A scene of the shared library (seed 1, diameter 1); aborts if it cannot be made. */
 scene test_scene(scene_kind kind, int dim, int64_t n, double fraction);
 
