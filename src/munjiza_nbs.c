@@ -228,10 +228,10 @@
  * (nbs__nbs_test512, nbs__nbs_test256) need a compiler that can target them; the processor
  * is asked at run time (ctx->simd). */
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define NBS__NBS_AVX512 1
+#define NBS__NBS_VECTOR 1
 #include <immintrin.h>
 #else
-#define NBS__NBS_AVX512 0
+#define NBS__NBS_VECTOR 0
 #endif
 
 /* ---- the work-block layout ----------------------------------------------------------- */
@@ -488,7 +488,7 @@ typedef struct nbs__nbs_got {
   double x[NBS__NBS_GATHER], y[NBS__NBS_GATHER], z[NBS__NBS_GATHER], r[NBS__NBS_GATHER];
 } nbs__nbs_got;
 
-#if NBS__NBS_AVX512
+#if NBS__NBS_VECTOR
 /* The pairs of the element at pa (radius ra, number ia) with the n candidates of G that it
  * touches, into out, in G's order: eight candidates at a time, the operations of
  * nbs__touch_at lane by lane (no contraction: the build has -ffp-contract=off), and the
@@ -587,7 +587,7 @@ nbs__nbs_pairs(nbs__run *run, const nbs__nbs_block *K, int dim, int32_t a, const
   const int32_t ia = ea->id;
   nbs_pair *out = run->buf + run->count;
   size_t kept = 0;
-#if NBS__NBS_AVX512
+#if NBS__NBS_VECTOR
   if (soa && run->ctx->simd == NBS__SIMD_AVX512) {
     kept = nbs__nbs_test512(ea->x, ra, d2, ia, G, n, dim, radii, out);
   } else if (soa) {
@@ -621,7 +621,7 @@ static inline nbs_status nbs__nbs_check_cell(nbs__run *run, const nbs__nbs_block
                                              int32_t c, const int32_t nb[4]) {
   /* the vector test where the candidates are many: 3D, or radii (whose cells are larger);
    * 2D's cells of equal elements have about four */
-  const bool soa = NBS__NBS_AVX512 && run->ctx->simd != NBS__SIMD_GENERIC &&
+  const bool soa = NBS__NBS_VECTOR && run->ctx->simd != NBS__SIMD_GENERIC &&
                    (dim == 3 || K->r != NULL);
   const nbs__nbs_entry *E = K->e;
   for (int32_t a = c; a != NBS__EMPTY; a = E[a].X) {
