@@ -82,6 +82,12 @@
  * from scratch 32.0; unmoved 28.8; steps of up to 1e-4, 1e-3, 1e-2 diameters per axis
  * 29.1, 29.8, 31.8 (450, 5,000, 50,000 elements sorted again). 2D: 16.1; 11.5; 13.2 at
  * 1e-3. With two threads (both the pass and the merge shared), 3D at 1e-3: 21.4 -> 18.7.
+ * Those figures are from the first instance, before the sort from scratch got faster. On
+ * the second (2d04df6, interleaved, min of 4-5): 3D from scratch 33.3-33.5; unmoved 29.6;
+ * steps of 1e-4, 1e-3, 1e-2 32.1, 34.0-34.4, 34.3 (481, 4,973, 49,771 elements sorted
+ * again): a step that moves anything costs in 3D what a sort from scratch does, since the
+ * merge moves the words and coordinates of every element after the first one taken out
+ * (32 B per element, read and written). 2D: from scratch 19.7, steps of 1e-3 18.5.
  * Like the gather, the pass waits on memory: it reads the input in the last order, at
  * random (it and the cold gather took 7.7 and 6.2 ns per element of these on a day when
  * this machine's memory was slow). Tried and left out: the pass in a function of its own
