@@ -85,9 +85,11 @@
  * Those figures are from the first instance, before the sort from scratch got faster. On
  * the second (2d04df6, interleaved, min of 4-5): 3D from scratch 33.3-33.5; unmoved 29.6;
  * steps of 1e-4, 1e-3, 1e-2 32.1, 34.0-34.4, 34.3 (481, 4,973, 49,771 elements sorted
- * again): a step that moves anything costs in 3D what a sort from scratch does, since the
- * merge moves the words and coordinates of every element after the first one taken out
- * (32 B per element, read and written). 2D: from scratch 19.7, steps of 1e-3 18.5.
+ * again; in another run 1e-4, 3e-4, 1e-3, 3e-3 33.1, 33.4, 33.4, 34.3 against 33.75 from
+ * scratch and 30.2 unmoved): a step that moves anything costs in 3D what a sort from
+ * scratch does, within a nanosecond either way, since the merge moves the words and
+ * coordinates of every element after the first one taken out (32 B per element, read and
+ * written). 2D: from scratch 19.7, steps of 1e-3 18.5.
  * Like the gather, the pass waits on memory: it reads the input in the last order, at
  * random (it and the cold gather took 7.7 and 6.2 ns per element of these on a day when
  * this machine's memory was slow). Tried and left out: the pass in a function of its own
