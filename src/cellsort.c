@@ -123,14 +123,13 @@
 #include "internal.h"
 
 #include <stdlib.h>
-/* The AVX-512 kernel needs a compiler that can target it (GCC and clang on x86-64); the
+/* The AVX-512 and AVX2 kernels where the compiler can target them (NBS__X86_SIMD); the
  * processor is asked at run time. */
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#if NBS__X86_SIMD
 #define NBS__CS_AVX512 1
 #define NBS__CS_AVX512_TARGET __attribute__((target("avx512f,avx512vl,avx512dq,popcnt")))
 /* AVX2 without FMA: the distance test must not be contracted */
 #define NBS__CS_AVX2_TARGET __attribute__((target("avx2,popcnt")))
-#include <immintrin.h>
 #else
 #define NBS__CS_AVX512 0
 #endif
@@ -711,13 +710,6 @@ const int32_t nbs__pack4[16][8] = {
     {4, 5, 6, 7, 0, 0, 0, 0}, {0, 1, 4, 5, 6, 7, 0, 0}, {2, 3, 4, 5, 6, 7, 0, 0},
     {0, 1, 2, 3, 4, 5, 6, 7}};
 
-/* Four int32 from p, each twice: {p0, p0, p1, p1, ...} */
-static inline __attribute__((always_inline)) NBS__CS_AVX2_TARGET __m256i
-nbs__cs_twice4(const int32_t *p) {
-  const __m256i v = _mm256_castsi128_si256(_mm_loadu_si128((const __m128i *)(const void *)p));
-  return _mm256_permutevar8x32_epi32(v, _mm256_set_epi32(3, 3, 2, 2, 1, 1, 0, 0));
-}
-
 static inline __attribute__((always_inline)) NBS__CS_AVX2_TARGET size_t
 nbs__cs_block256_body(const nbs__cs *c, int dim, bool radii, bool contacts, int32_t c0,
                       int lanes, const nbs__cs_ranges *rg, nbs_pair *out) {
@@ -752,7 +744,7 @@ nbs__cs_block256_body(const nbs__cs *c, int dim, bool radii, bool contacts, int3
     BI[l] = BI[l + 8] = l < lanes ? ids[(size_t)(c0 + l) * istep] & imask : 0;
   }
   /* each lane's element twice, {ip, ip}, for lanes 0-3 and 4-7 */
-  const __m256i IPa = nbs__cs_twice4(BI), IPb = nbs__cs_twice4(BI + 4);
+  const __m256i IPa = nbs__twice4(BI), IPb = nbs__twice4(BI + 4);
   const __m256d LIM = _mm256_set1_pd(c->d2);
   size_t m = 0;
   /* the lanes of half h (a: 0-3, b: 4-7) against partners QX.. IQ, keeping the lanes of the
@@ -805,7 +797,7 @@ nbs__cs_block256_body(const nbs__cs *c, int dim, bool radii, bool contacts, int3
     const __m256d qzb = dim == 3 ? _mm256_loadu_pd(BZ + k + 4) : qxb;
     const __m256d qra = radii ? _mm256_loadu_pd(BR + k) : qxa;
     const __m256d qrb = radii ? _mm256_loadu_pd(BR + k + 4) : qxb;
-    const __m256i iqa = nbs__cs_twice4(BI + k), iqb = nbs__cs_twice4(BI + k + 4);
+    const __m256i iqa = nbs__twice4(BI + k), iqb = nbs__twice4(BI + k + 4);
     NBS__CS_HALF256(a, qxa, qya, qza, qra, iqa, vm & 0xF);
     if (vm >> 4) NBS__CS_HALF256(b, qxb, qyb, qzb, qrb, iqb, vm >> 4);
   }
@@ -2438,7 +2430,7 @@ nbs_status nbs__cellsort(nbs__run *run) {
   c.by = by;
   c.fine = (uint64_t)1 << fine_bits;
   c.ks = packed ? eb : 0;
-  c.imask = packed && eb < 32 ? (uint32_t)(((uint64_t)1 << eb) - 1) : UINT32_MAX;
+  c.imask = packed ? (uint32_t)(((uint64_t)1 << eb) - 1) : UINT32_MAX;
   run->work_bytes = bytes;
 
   nbs__cs_keying kg;

@@ -30,6 +30,16 @@
 #include <stdint.h>
 #include <string.h>
 
+/* The vector code (cellsort's kernels, NBS's tests of gathered candidates) needs a compiler
+ * that can target AVX2 and AVX-512 (GCC and clang on x86-64); the processor is asked at run
+ * time (ctx->simd). */
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define NBS__X86_SIMD 1
+#include <immintrin.h>
+#else
+#define NBS__X86_SIMD 0
+#endif
+
 /* Every algorithm must evaluate the distance test as the same sequence of IEEE operations,
  * or a tie could be decided differently by two of them: no fused multiply-add. The build
  * passes -ffp-contract=off; clang also honours the standard pragma (gcc, in its ISO modes,
@@ -333,11 +343,19 @@ size_t nbs__cellsort_bytes(int dim, int32_t n, bool radii, int threads);
  * NBS_SIMD=generic or NBS_SIMD=avx2 asks for a lesser one. */
 enum { NBS__SIMD_GENERIC = 0, NBS__SIMD_AVX512 = 1, NBS__SIMD_AVX2 = 2 };
 int nbs__cellsort_simd(void);
+#if NBS__X86_SIMD
 /* The permutations of 8 int32 (4 pairs) that pack the pairs of a 4-bit mask to the front,
  * for AVX2, which has no compress: row m moves the pairs of m's set bits, in order. Used by
- * cellsort's and NBS's AVX2 tests; defined in cellsort.c where the compiler can target
- * AVX2. */
+ * cellsort's and NBS's AVX2 tests; defined in cellsort.c. */
 extern const int32_t nbs__pack4[16][8];
+/* Four int32 from p, each twice: {p0, p0, p1, p1, ...}. Against an element's number twice,
+ * a pair {min, max} is then one min and one max blended, already in nbs_pair's layout. */
+static inline __attribute__((always_inline, target("avx2"))) __m256i
+nbs__twice4(const int32_t *p) {
+  const __m256i v = _mm256_castsi128_si256(_mm_loadu_si128((const __m128i *)(const void *)p));
+  return _mm256_permutevar8x32_epi32(v, _mm256_set_epi32(3, 3, 2, 2, 1, 1, 0, 0));
+}
+#endif
 size_t nbs__cellsort_partition_min(void);
 
 /* Work-block layouts, for work_kind. */

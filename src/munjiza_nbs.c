@@ -224,15 +224,6 @@
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
-/* The AVX-512 and AVX2 tests of an element against the gathered candidates
- * (nbs__nbs_test512, nbs__nbs_test256) need a compiler that can target them; the processor
- * is asked at run time (ctx->simd). */
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define NBS__NBS_VECTOR 1
-#include <immintrin.h>
-#else
-#define NBS__NBS_VECTOR 0
-#endif
 
 /* ---- the work-block layout ----------------------------------------------------------- */
 
@@ -488,7 +479,7 @@ typedef struct nbs__nbs_got {
   double x[NBS__NBS_GATHER], y[NBS__NBS_GATHER], z[NBS__NBS_GATHER], r[NBS__NBS_GATHER];
 } nbs__nbs_got;
 
-#if NBS__NBS_VECTOR
+#if NBS__X86_SIMD
 /* The pairs of the element at pa (radius ra, number ia) with the n candidates of G that it
  * touches, into out, in G's order: eight candidates at a time, the operations of
  * nbs__touch_at lane by lane (no contraction: the build has -ffp-contract=off), and the
@@ -536,9 +527,6 @@ nbs__nbs_test256(const double *pa, double ra, double d2, int32_t ia, const nbs__
   const __m256d AZ = _mm256_set1_pd(dim == 3 ? pa[2] : 0), RA = _mm256_set1_pd(ra);
   const __m256d LIM = _mm256_set1_pd(d2);
   const __m256i IA = _mm256_set1_epi32(ia);
-  /* each candidate's number twice, {b0, b0, b1, b1, ...}: a pair {min, max} is then a blend
-   * of one min and one max, already in nbs_pair's layout */
-  const __m256i twice = _mm256_set_epi32(3, 3, 2, 2, 1, 1, 0, 0);
   size_t kept = 0;
   for (int j = 0; j < n; j += 4) {
     /* G's arrays hold NBS__NBS_GATHER (a multiple of 4) entries: the loads stay inside
@@ -557,9 +545,7 @@ nbs__nbs_test256(const double *pa, double ra, double d2, int32_t ia, const nbs__
       lim = _mm256_mul_pd(rr, rr);
     }
     const unsigned hit = (unsigned)_mm256_movemask_pd(_mm256_cmp_pd(d, lim, _CMP_LE_OQ)) & m;
-    const __m256i id = _mm256_permutevar8x32_epi32(
-        _mm256_castsi128_si256(_mm_loadu_si128((const __m128i *)(const void *)(G->id + j))),
-        twice);
+    const __m256i id = nbs__twice4(G->id + j); /* each candidate's number twice */
     const __m256i pr =
         _mm256_blend_epi32(_mm256_min_epi32(IA, id), _mm256_max_epi32(IA, id), 0xAA);
     const __m256i pk = _mm256_loadu_si256((const __m256i *)(const void *)nbs__pack4[hit]);
@@ -587,7 +573,7 @@ nbs__nbs_pairs(nbs__run *run, const nbs__nbs_block *K, int dim, int32_t a, const
   const int32_t ia = ea->id;
   nbs_pair *out = run->buf + run->count;
   size_t kept = 0;
-#if NBS__NBS_VECTOR
+#if NBS__X86_SIMD
   if (soa && run->ctx->simd == NBS__SIMD_AVX512) {
     kept = nbs__nbs_test512(ea->x, ra, d2, ia, G, n, dim, radii, out);
   } else if (soa) {
@@ -621,7 +607,7 @@ static inline nbs_status nbs__nbs_check_cell(nbs__run *run, const nbs__nbs_block
                                              int32_t c, const int32_t nb[4]) {
   /* the vector test where the candidates are many: 3D, or radii (whose cells are larger);
    * 2D's cells of equal elements have about four */
-  const bool soa = NBS__NBS_VECTOR && run->ctx->simd != NBS__SIMD_GENERIC &&
+  const bool soa = NBS__X86_SIMD && run->ctx->simd != NBS__SIMD_GENERIC &&
                    (dim == 3 || K->r != NULL);
   const nbs__nbs_entry *E = K->e;
   for (int32_t a = c; a != NBS__EMPTY; a = E[a].X) {

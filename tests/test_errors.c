@@ -594,7 +594,7 @@ static void test_limit_sequence(void) {
       ta.failures = 0;
       const nbs_status st = nbs_detect(ctx, &in, &def);
       ta.fail_at = -1;
-      tally[st]++;
+      if ((size_t)st < sizeof tally / sizeof *tally) tally[st]++; /* others fail below */
       pair_list got;
       got.p = (nbs_pair *)nbs_pairs(ctx, &got.count);
       /* the buffer holds no pairs after an error, nor after a detection with a callback */
