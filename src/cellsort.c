@@ -70,39 +70,51 @@
  * Time steps. A simulation detects the same elements every step, and they move little in a
  * step. The context keeps the cell order of the last detection (the sorted packed words,
  * ctx->cs_order_n), and a detection of the same n (and the same element bits in its words,
- * ctx->cs_order_eb) starts from it (nbs__cs_warm): one pass reads the elements in that
- * order, as the gather does, computes each one's key again and keeps in place the elements
- * whose key did not change; the few that changed place are sorted again and merged back.
- * That replaces steps 1-3 (sort and gather) by one pass like the gather. The result, sorted
- * by the whole word, is the order of a sort from scratch, so nothing else differs. For the
- * keys to stay put, the grid's origin is a point of a fixed lattice of spacing the edge
- * below the lowest coordinate (nbs__cs_anchor), not the lowest coordinate itself. Measured
- * (3D, N = 1e6, fraction 0.5, random order, one thread, min of 5 processes, ns per element;
- * nbs_bench --move D against --fresh):
- * from scratch 32.0; unmoved 28.8; steps of up to 1e-4, 1e-3, 1e-2 diameters per axis
- * 29.1, 29.8, 31.8 (450, 5,000, 50,000 elements sorted again). 2D: 16.1; 11.5; 13.2 at
- * 1e-3. With two threads (both the pass and the merge shared), 3D at 1e-3: 21.4 -> 18.7.
- * Those figures are from the first instance, before the sort from scratch got faster. On
- * the second (2d04df6, interleaved, min of 4-5): 3D from scratch 33.3-33.5; unmoved 29.6;
- * steps of 1e-4, 1e-3, 1e-2 32.1, 34.0-34.4, 34.3 (481, 4,973, 49,771 elements sorted
- * again; in another run 1e-4, 3e-4, 1e-3, 3e-3 33.1, 33.4, 33.4, 34.3 against 33.75 from
- * scratch and 30.2 unmoved): a step that moves anything costs in 3D what a sort from
- * scratch does, within a nanosecond either way, since the merge moves the words and
- * coordinates of every element after the first one taken out (32 B per element, read and
- * written). 2D: from scratch 19.7, steps of 1e-3 18.5.
- * Like the gather, the pass waits on memory: it reads the input in the last order, at
- * random (it and the cold gather took 7.7 and 6.2 ns per element of these on a day when
- * this machine's memory was slow). Tried and left out: the pass in a function of its own
- * with restrict pointers and the grid in locals (no faster, 29.3 vs 29.7 unmoved).
+ * ctx->cs_order_eb) starts from it. For the keys to stay put, the grid's origin is a point
+ * of a fixed lattice of spacing the edge below the lowest coordinate (nbs__cs_anchor), not
+ * the lowest coordinate itself. The result, sorted by the whole word, is the order of a
+ * sort from scratch, so nothing else differs. Two ways:
+ *  - where the words' low half is the element alone (eb = 32: keys of at most 31 bits, every
+ *    uniform scene of the benchmarks), nbs__cs_rekey: the idx array, which packed words
+ *    leave free, holds each element's key of the last order (ctx->cs_keys; the first start
+ *    from an order after a sort from scratch writes them, nbs__cs_keys_of). One pass over
+ *    the input in element order, sequential like the key pass, computes each key again
+ *    against idx[e]; the few elements whose key changed are sorted (their old words and
+ *    their new) and merged into the last order's words, 8 bytes per element; and the
+ *    coordinates are gathered once, as from scratch. That replaces the key pass and the
+ *    radix sort (steps 1-2) by a pass like the key pass and a merge of words;
+ *  - else nbs__cs_warm: one pass reads the elements in the last order, as the gather does,
+ *    computes each one's key again and keeps in place, with its coordinates, the elements
+ *    whose key did not change; the few that changed place are sorted again and merged back,
+ *    words and coordinates. That replaces steps 1-3 by one pass like the gather and a merge
+ *    that moves the words and coordinates of every element after the first one taken out
+ *    (32 B per element, read and written).
+ * Measured (3D, N = 1e6, fraction 0.5, random order, one thread, interleaved, min of 3-5
+ * processes, ns per element; nbs_bench --move D against --fresh; the same bytes):
+ *   nbs__cs_warm (before nbs__cs_rekey): from scratch 33.0-33.3, unmoved 29.6, steps of
+ *     1e-4 32.5, 1e-3 33.0-33.2, 1e-2 34.6;
+ *   nbs__cs_rekey: from scratch 33.0-33.4, unmoved 27.6, steps of 1e-4 29.7, 1e-3
+ *     29.1-29.2, 1e-2 31.4
+ * (steps of up to D diameters per axis: 481, 5,051, 49,645 elements sorted again). 2D: from
+ * scratch 19.5-19.8, steps of 1e-3 18.2 -> 15.3, unmoved 15.8 -> 15.3. Two threads, 3D at
+ * 1e-3: 18.7 -> 15.4. N = 1e7, 3D at 1e-3: 36.7 -> 31.4; 1e5 25.8 -> 24.3; 1e4 22.3 -> 22.5,
+ * and 2D 1e4 11.0 and 10.9, where everything is in the caches. nbs__cs_warm's pass read the
+ * input in the last order, at random, and computed the keys there; done as a gather then a
+ * key check from the L1 cache, a chunk at a time, it was no faster (unmoved 29.4 / 29.4,
+ * 1e-3 33.8 -> 35.0): the merge's moves were the cost. The first start after a sort from
+ * scratch pays for writing the keys (a scatter, about a nanosecond per element); stored by
+ * the key pass instead, they cost every detection from scratch 0.3 ns (33.1 -> 33.4, 2D
+ * 19.6 -> 19.9). More than n / 16 changed keys (steps of 3e-2 here) stop either way, and the
+ * detection sorts from scratch.
  * Where the time goes (3D, N = 1e6, fraction 0.5, random order, one thread, AVX-512; about
  * 28 ns per element in all): input validation 0.8, keys 1.2, sort 3.5, gather 3, sweep 19
  * (the kernel about 13.5 of it, finding windows and rows 5.5).
  * Memory: 8 (key) + 4 (element) + 8 * dim (coordinates) bytes per element, + 8 with radii:
  * 36 B per element in 3D, whatever the extent of the domain (packed keys leave the 4 bytes
- * of the element unused; they are held all the same, so that a scene that spreads out never
- * makes a detection allocate). The radix sort's scratch lives in the coordinate arrays
- * before the gather: x's for the passes over all keys, y's (and z's) for each thread's
- * bucket (nbs__radix).
+ * of the element free for the time steps' keys or scratch; they are held all the same, so
+ * that a scene that spreads out never makes a detection allocate). The radix sort's
+ * scratch lives in the coordinate arrays before the gather: x's for the passes over all
+ * keys, y's (and z's) for each thread's bucket (nbs__radix).
  * Time: O(N * passes) for the sort, with passes = ceil(bits of the cell count / 9), i.e.
  * linear in N for any domain whose cell count fits 64 bits, plus O(candidates).
  *
@@ -1535,11 +1547,12 @@ static void nbs__cs_merge(const nbs__cs *c, const nbs__run *run, int32_t k, cons
 /* The warm start: at most this share (1 / it) of the elements may change place. */
 #define NBS__CS_WARM_SHARE 16
 
-/* Starts from the last detection's cell order (nbs_detect's "time steps"). key[] holds it
- * as packed words, sorted, of the same n elements. One pass reads the elements in that
- * order, as the gather does, and computes each one's new word. An element whose word is
- * unchanged keeps its place: it moves down over the places of those taken out before it,
- * with its coordinates, and these words stay sorted, since they were. An element whose
+/* Starts from the last detection's cell order (nbs_detect's "time steps") where the words'
+ * low half is not the element alone (eb < 32; else nbs__cs_rekey, below, which is faster).
+ * key[] holds it as packed words, sorted, of the same n elements. One pass reads the
+ * elements in that order, as the gather does, and computes each one's new word. An element
+ * whose word is unchanged keeps its place: it moves down over the places of those taken out
+ * before it, with its coordinates, and these words stay sorted, since they were. An element whose
  * word changed (it moved to another x sub-cell, row or layer) is taken out to `spare`.
  * When none changed, that is all: the sort and the gather are skipped (the figures are in
  * the file comment). Otherwise the few taken out are sorted
@@ -1630,6 +1643,214 @@ static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
              nbs__radix_digits(bits + eb), hist, 1, NULL, 0);
   nbs__cs_merge(c, run, k, spare, m, spare + 2 * limit, limit, threads);
   *moved = m;
+  return true;
+}
+
+/* Step 3, the gather: place p of the cell order takes the coordinates (and radius) of the
+ * element of word p, from key[] (idx[] for unpacked keys); or, where src is not NULL, of
+ * src[p], which is copied to key[p] (src may be the x coordinates' array: place p reads
+ * src[p] before it writes xs[p]). Where the input is small, in a loop of its own without
+ * the prefetches (a branch on it in the one loop, or a function inlined twice with it a
+ * constant, which OpenMP outlines once, took 24.0-24.3 ns per element against 23.3 at 3D
+ * N = 1e4). */
+static void nbs__cs_gather(const nbs__cs *c, const nbs__run *run, const uint64_t *src,
+                           int threads) {
+  const int32_t n = c->n;
+  const int dim = c->dim;
+  const double *x = run->x;
+  const uint64_t emask = c->imask;
+  const bool packed = c->idx == NULL;
+  uint64_t *key = c->key;
+  if (nbs__cs_input_bytes(c) <= NBS__CS_PREFETCH_MIN) {
+    double *restrict xs = c->xs, *restrict ys = c->ys, *restrict zs = c->zs;
+    double *restrict rs = c->rs;
+    const double *r = run->r;
+    if (src) {
+#if defined(_OPENMP)
+#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
+#endif
+      for (int32_t p = 0; p < n; p++) {
+        const uint64_t w = src[p];
+        key[p] = w;
+        nbs__cs_place(xs, ys, zs, rs, x, r, dim, p, (int32_t)(w & emask));
+      }
+      return;
+    }
+    const uint64_t *restrict kr = key;
+#if defined(_OPENMP)
+#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
+#endif
+    for (int32_t p = 0; p < n; p++) {
+      nbs__cs_place(xs, ys, zs, rs, x, r, dim, p, packed ? (int32_t)(kr[p] & emask) : c->idx[p]);
+    }
+    return;
+  }
+  if (src) {
+    /* each part asks for words of its own only: the next part's may be coordinates */
+#if defined(_OPENMP)
+#pragma omp parallel num_threads(threads) if (threads > 1)
+#endif
+    NBS__PARTS(t, threads) {
+      const int32_t from = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
+      for (int32_t p = from; p < to; p++) {
+        const int32_t pa = p + NBS__CS_AHEAD < to ? p + NBS__CS_AHEAD : p;
+        const int32_t pn = p + NBS__CS_NEAR < to ? p + NBS__CS_NEAR : p;
+        nbs__cs_prefetch(x, run->r, dim, (int32_t)(src[pa] & emask), (int32_t)(src[pn] & emask));
+        const uint64_t w = src[p];
+        key[p] = w;
+        nbs__cs_take(c, run, p, (int32_t)(w & emask));
+      }
+    }
+    return;
+  }
+#if defined(_OPENMP)
+#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
+#endif
+  for (int32_t p = 0; p < n; p++) {
+    /* ask for the elements a few iterations ahead: the reads are random */
+    const int32_t pa = p + NBS__CS_AHEAD < n ? p + NBS__CS_AHEAD : p;
+    const int32_t pn = p + NBS__CS_NEAR < n ? p + NBS__CS_NEAR : p;
+    nbs__cs_prefetch(x, run->r, dim, packed ? (int32_t)(key[pa] & emask) : c->idx[pa],
+                     packed ? (int32_t)(key[pn] & emask) : c->idx[pn]);
+    nbs__cs_take(c, run, p, packed ? (int32_t)(key[p] & emask) : c->idx[p]);
+  }
+}
+
+/* The number of words of the sorted a[0, len) below v. */
+static int64_t nbs__cs_rank(const uint64_t *a, int64_t len, uint64_t v) {
+  int64_t lo = 0, hi = len;
+  while (lo < hi) {
+    const int64_t mid = lo + (hi - lo) / 2;
+    if (a[mid] < v) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo;
+}
+
+/* keys[e] = the key of element e in the order of key[], whose words' low half is the
+ * element alone: where the last detection did not leave them (a detection from scratch),
+ * for nbs__cs_rekey. A scatter, about a nanosecond per element at N = 1e6, paid by the
+ * first start from an order, not by every detection from scratch (there, as a store
+ * beside each word of the key pass, 0.3 ns of every detection). */
+static void nbs__cs_keys_of(const nbs__cs *c, uint32_t *keys, int threads) {
+  const int32_t n = c->n;
+  const uint64_t *key = c->key;
+  (void)threads; /* without OpenMP */
+#if defined(_OPENMP)
+#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
+#endif
+  for (int32_t p = 0; p < n; p++) keys[(uint32_t)key[p]] = (uint32_t)(key[p] >> 32);
+}
+
+/* The start from the last order where its words' low half is the element alone and the
+ * idx array holds each element's key of that order (ctx->cs_keys): the elements whose key
+ * changed are found by one pass over the input in element order, reading and writing
+ * idx[e] beside it, not in the last order (a random read of each element); only their words
+ * are sorted and merged into the last order's, 8 bytes per element; and the coordinates are
+ * then gathered once, in the new order, as from scratch. nbs__cs_warm instead reads the
+ * elements in the last order, and its merge moves every element's word and coordinates
+ * after the first taken out: in 3D that cost what the sort from scratch does.
+ *   1. each element's key again; where it differs from idx[e], the element's old word
+ *      (idx[e] << 32 | e) goes to R, its new one to S, and idx[e] takes the new key;
+ *   2. R and S sorted (the radix sort, by the whole word);
+ *   3. key[] without R, merged with S, into M: in T parts, part t from the last order's
+ *      words [n t / T, n (t + 1) / T), with the words of R and S between the first of them
+ *      and the next part's first (found by bisection);
+ *   4. the gather from M, each word copied to key[] as it is read.
+ * Sorted by the whole word, the result is the order of a sort from scratch, as for
+ * nbs__cs_warm. Scratch: M in the x coordinates' array, R, S and the sort's scratch in the
+ * y coordinates' (3 n / NBS__CS_WARM_SHARE words of n), each read before the gather writes
+ * it. Returns false, having written nothing the caller needs, when more than n /
+ * NBS__CS_WARM_SHARE keys changed. */
+static bool nbs__cs_rekey(const nbs__cs *c, const nbs__run *run, const nbs__cs_keying *kg,
+                          int bits, uint32_t *keys, uint32_t *hist, int threads,
+                          int64_t *moved) {
+  const int32_t n = c->n;
+  const int dim = c->dim;
+  const int64_t limit = n / NBS__CS_WARM_SHARE, share = limit / threads;
+  uint64_t *key = c->key;
+  const double *x = run->x;
+  uint64_t *M = (uint64_t *)(void *)c->xs, *R = (uint64_t *)(void *)c->ys, *S = R + limit;
+  uint64_t *scratch = S + limit;
+  int64_t out[NBS__THREADS_MAX] = {0}; /* zeroed for GCC 12 without OpenMP, as in nbs__cs_warm */
+  bool over = false;
+  /* 1 */
+#if defined(_OPENMP)
+#pragma omp parallel num_threads(threads) if (threads > 1) reduction(|| : over)
+#endif
+  NBS__PARTS(t, threads) {
+    const int32_t from = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
+    const nbs__grid g = *kg->g;
+    nbs__cs_keying kl = *kg;
+    kl.g = &g;
+    uint64_t *r = R + (size_t)t * (size_t)share, *s = S + (size_t)t * (size_t)share;
+    int64_t m = 0;
+    for (int32_t e = from; e < to; e++) {
+      const uint32_t k = (uint32_t)nbs__cs_cellkey(&kl, x + (size_t)e * (size_t)dim);
+      const uint32_t old = keys[e];
+      if (k != old) {
+        if (m == share) {
+          over = true;
+          break;
+        }
+        r[m] = (uint64_t)old << 32 | (uint64_t)e;
+        s[m++] = (uint64_t)k << 32 | (uint64_t)e;
+        keys[e] = k;
+      }
+    }
+    out[t] = m;
+  }
+  *moved = 0;
+  if (over) return false;
+  int64_t m = out[0];
+  for (int t = 1; t < threads; t++) {
+    memmove(R + m, R + (size_t)t * (size_t)share, (size_t)out[t] * sizeof *R);
+    memmove(S + m, S + (size_t)t * (size_t)share, (size_t)out[t] * sizeof *S);
+    m += out[t];
+  }
+  *moved = m;
+  if (m == 0) {
+    nbs__cs_gather(c, run, NULL, threads);
+    return true;
+  }
+  /* 2 */
+  const nbs__digits dg = nbs__radix_digits(bits + 32);
+  nbs__radix(R, NULL, scratch, NULL, R, NULL, (int32_t)m, 0, dg, hist, 1, NULL, 0);
+  nbs__radix(S, NULL, scratch, NULL, S, NULL, (int32_t)m, 0, dg, hist, 1, NULL, 0);
+  /* 3 */
+  int32_t ib[NBS__THREADS_MAX + 1];
+  int64_t rb[NBS__THREADS_MAX + 1], sb[NBS__THREADS_MAX + 1];
+  for (int t = 0; t <= threads; t++) {
+    /* the first part takes the words of S below key[0] too, the last those above key[n - 1] */
+    ib[t] = nbs__chunk(n, t, threads);
+    rb[t] = t == 0 ? 0 : t == threads ? m : nbs__cs_rank(R, m, key[ib[t]]);
+    sb[t] = t == 0 ? 0 : t == threads ? m : nbs__cs_rank(S, m, key[ib[t]]);
+  }
+#if defined(_OPENMP)
+#pragma omp parallel num_threads(threads) if (threads > 1)
+#endif
+  NBS__PARTS(t, threads) {
+    int64_t r = rb[t], s = sb[t], p = ib[t] - rb[t] + sb[t];
+    const int64_t r1 = rb[t + 1], s1 = sb[t + 1];
+    uint64_t nr = r < r1 ? R[r] : UINT64_MAX, ns = s < s1 ? S[s] : UINT64_MAX;
+    for (int32_t i = ib[t]; i < ib[t + 1]; i++) {
+      const uint64_t w = key[i];
+      if (w == nr) { /* taken out */
+        r++;
+        nr = r < r1 ? R[r] : UINT64_MAX;
+        continue;
+      }
+      while (ns < w) {
+        M[p++] = ns;
+        s++;
+        ns = s < s1 ? S[s] : UINT64_MAX;
+      }
+      M[p++] = w;
+    }
+    while (s < s1) M[p++] = S[s++];
+  }
+  /* 4 */
+  nbs__cs_gather(c, run, M, threads);
   return true;
 }
 
@@ -2212,34 +2433,8 @@ static void nbs__cs_sort_gather(const nbs__cs *c, const nbs__run *run, const nbs
     nbs__radix(k0, i0, k1, i1, c->key, c->idx, n, c->ks, dg, hist, threads,
                (uint64_t *)(void *)c->ys, nn * (size_t)(dim - 1));
   }
-  /* 3. gather; where the input is small, in a loop of its own without the prefetches (a
-   * branch on it in the one loop, or a function inlined twice with it a constant, which
-   * OpenMP outlines once, took 24.0-24.3 ns per element against 23.3 at 3D N = 1e4) */
-  const uint64_t emask = c->imask;
-  if (input <= NBS__CS_PREFETCH_MIN) {
-    double *restrict xs = c->xs, *restrict ys = c->ys, *restrict zs = c->zs;
-    double *restrict rs = c->rs;
-    const uint64_t *restrict key = c->key;
-    const double *r = run->r;
-#if defined(_OPENMP)
-#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
-#endif
-    for (int32_t p = 0; p < n; p++) {
-      nbs__cs_place(xs, ys, zs, rs, x, r, dim, p, packed ? (int32_t)(key[p] & emask) : c->idx[p]);
-    }
-    return;
-  }
-#if defined(_OPENMP)
-#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
-#endif
-  for (int32_t p = 0; p < n; p++) {
-    /* ask for the elements a few iterations ahead: the reads are random */
-    const int32_t pa = p + NBS__CS_AHEAD < n ? p + NBS__CS_AHEAD : p;
-    const int32_t pn = p + NBS__CS_NEAR < n ? p + NBS__CS_NEAR : p;
-    nbs__cs_prefetch(x, run->r, dim, packed ? (int32_t)(c->key[pa] & emask) : c->idx[pa],
-                     packed ? (int32_t)(c->key[pn] & emask) : c->idx[pn]);
-    nbs__cs_take(c, run, p, packed ? (int32_t)(c->key[p] & emask) : c->idx[p]);
-  }
+  /* 3. gather */
+  nbs__cs_gather(c, run, NULL, threads);
 }
 
 bool nbs__cellsort_fits(const nbs__grid *g) {
@@ -2445,12 +2640,21 @@ nbs_status nbs__cellsort(nbs__run *run) {
 
   /* 0. from the last detection's order, when the elements have moved little since */
   bool warm = false;
+  const bool keys = ctx->cs_keys;
+  ctx->cs_keys = false; /* until this detection has written them */
   if (had_order && packed && !run->fresh) {
     if (ctx->cs_warm_wait > 0) {
       ctx->cs_warm_wait--;
     } else {
-      warm = nbs__cs_warm(&c, run, &kg, eb, bits, (uint64_t *)(void *)(w + at[0]), hist,
-                          threads, &run->moved);
+      if (eb == 32) {
+        uint32_t *ek = (uint32_t *)(void *)(w + at[0]);
+        if (!keys) nbs__cs_keys_of(&c, ek, threads);
+        warm = nbs__cs_rekey(&c, run, &kg, bits, ek, hist, threads, &run->moved);
+        ctx->cs_keys = warm;
+      } else {
+        warm = nbs__cs_warm(&c, run, &kg, eb, bits, (uint64_t *)(void *)(w + at[0]), hist,
+                            threads, &run->moved);
+      }
       if (!warm && ctx->cs_warm_fails < 6) ctx->cs_warm_fails++;
       if (warm) ctx->cs_warm_fails = 0;
       ctx->cs_warm_wait = warm ? 0 : 1 << ctx->cs_warm_fails;

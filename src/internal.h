@@ -114,6 +114,10 @@ struct nbs_context {
    * well as on n). */
   int32_t cs_order_n;
   int cs_order_eb;
+  /* With that order, and words whose low half is the element alone (cs_order_eb 32), the
+   * work block's idx array may hold each element's key, idx[e] = word >> 32 for the word
+   * of element e in the order: cs_keys says it does (nbs__cs_rekey). */
+  bool cs_keys;
   /* After a start from it fails (too many elements changed place), the next cs_warm_wait
    * detections sort from scratch without trying: 2, 4, ... 64 after 1, 2, ... 6 failures in
    * a row (cs_warm_fails), so that steps that keep failing stop paying for the try. */

@@ -530,6 +530,17 @@ static void det_step(nbs_context *ctx, nbs_context *ref_ctx, const scene *s,
   pair_list_free(&ref);
 }
 
+/* Puts element n - 1 of s (when far) 64 boxes (2D: 1024) beyond the others on every axis:
+ * the cell keys then take more than 31 bits, and cellsort's packed words give the element
+ * fewer than 32 (the start from the last order is then nbs__cs_warm, else
+ * nbs__cs_rekey). */
+static void det_far(scene *s, bool far, double box) {
+  if (!far) return;
+  for (int a = 0; a < s->dim; a++) {
+    s->coords[(s->n - 1) * s->dim + a] = (s->dim == 2 ? 1024.0 : 64.0) * box;
+  }
+}
+
 /* Time steps: cellsort (and auto) start a detection from the last one's cell order
  * (nbs.h). Through steps that move the elements a little (and sometimes not at all), move
  * them far, replace them, change n, the dimension or the radii, or follow another
@@ -537,12 +548,15 @@ static void det_step(nbs_context *ctx, nbs_context *ref_ctx, const scene *s,
  * scratch, in order, in both modes, through the buffer and a callback, with 1 to 3
  * threads (on enough elements for cellsort to use them). The statistics must show the order
  * reused with elements re-sorted on small steps, and not reused on an input of other
- * elements, so that both paths are taken. */
+ * elements, so that both paths are taken; and each of the two ways of starting from the
+ * order (cellsort.c) must have been taken: with an element far out (keys of more than 31
+ * bits: nbs__cs_warm) and without (nbs__cs_rekey, which leaves ctx->cs_keys set). */
 static void test_time_steps(void) {
-  const det_kind kinds[] = {DET_UNIFORM, DET_QUANTIZED, DET_RADII};
+  const det_kind kinds[] = {DET_UNIFORM, DET_QUANTIZED, DET_RADII, DET_UNIFORM};
   for (int dim = 2; dim <= 3; dim++) {
     for (size_t kd = 0; kd < sizeof kinds / sizeof *kinds; kd++) {
       const det_kind kind = kinds[kd];
+      const bool far = kd == 3; /* the last: uniform with an element far out */
       for (int threads = 1; threads <= 3; threads++) {
         /* cellsort takes a thread per 20000 elements: 70000 let 3 threads work (3: parts
          * of unequal merges); the box keeps the fraction near 0.5 */
@@ -563,6 +577,7 @@ static void test_time_steps(void) {
            * cellsort's origin, which moves when the lowest coordinate crosses one, and every
            * key with it: six small steps (quantized: at most 6 x 0.125) do not reach one */
           scene s = det_scene(kind, dim, n, box, 1.18, 30 + kd);
+          det_far(&s, far, box);
           uint64_t rng = 77;
           const double small = kind == DET_QUANTIZED ? -0.125 : 0.01;
           nbs_stats st;
@@ -584,8 +599,15 @@ static void test_time_steps(void) {
               /* one element in 7 by a hundredth, one in 61 by a sub-cell (quantized): either
                * way fewer than n / 16 change place */
               det_move(&s, k, kind == DET_QUANTIZED ? 61 : 7, small, &rng);
+              /* and at the fourth, element 0 to the lowest corner, whose key is the lowest:
+               * it goes before the first element of the last order (the merge's first part
+               * takes the words below the last order's first) */
+              if (k == 3) {
+                for (int a = 0; a < dim; a++) s.coords[a] = 1.18;
+              }
               STEP("small step");
               CHECK_EQ(st.reused_order, 1);
+              CHECK_MSG(ctx->cs_keys == !far, "%s: cs_keys %d", what, (int)ctx->cs_keys);
               moved += st.moved;
             }
             CHECK_MSG(moved > 0, "%s: no element changed place in six steps", what);
@@ -595,6 +617,7 @@ static void test_time_steps(void) {
             for (int k = 0; k < 4; k++) STEP("after a far step"); /* waits, then reuses */
             CHECK_EQ(st.reused_order, 1);
             scene other = det_scene(kind, dim, n, box, 3.0, 90 + kd);
+            det_far(&other, far, box);
             scene keep = s;
             s = other;
             STEP("other elements");
@@ -661,6 +684,27 @@ static void test_time_steps(void) {
     CHECK_MSG(st.reused_order == reused[k], "%s: reused %d", what, st.reused_order);
   }
   nbs_context_destroy(bctx);
+  /* An input over 8 MiB (cellsort's NBS__CS_PREFETCH_MIN), where the gathers prefetch:
+   * the gather from scratch and that of nbs__cs_rekey, with one thread and two. */
+  for (int threads = 1; threads <= 2 && !test_failures; threads++) {
+    nbs_context_def cdef = nbs_default_context_def();
+    cdef.threads = threads;
+    nbs_context *lctx;
+    ASSERT_OK(nbs_context_create(&cdef, &lctx));
+    scene big = det_scene(DET_UNIFORM, 3, 380000, 70.0, 1.18, 45);
+    uint64_t rng = 78;
+    for (int k = 0; k < 5 && !test_failures; k++) {
+      if (k >= 2) det_move(&big, k, 7, 0.01, &rng);
+      char what[64];
+      snprintf(what, sizeof what, "large input, %d threads, step %d", threads, k);
+      det_step(lctx, ref, &big, NBS_AUTO, NBS_MODE_CONTACTS, false, &st, what);
+      CHECK_MSG(st.reused_order == (k > 0) && (k < 2 || st.moved > 0) && lctx->cs_keys == (k > 0),
+                "%s: reused %d, moved %lld, keys %d", what, st.reused_order,
+                (long long)st.moved, (int)lctx->cs_keys);
+    }
+    scene_free(&big);
+    nbs_context_destroy(lctx);
+  }
   scene_free(&wide);
   scene_free(&s3);
   scene_free(&s2);

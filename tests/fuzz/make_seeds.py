@@ -7,6 +7,9 @@ distance and on cell faces, identical points, chains at ri + rj (and one ulp off
 offsets up to +-1.7e308, denormal and overflowing diameters, radius ratios of 1e6, tight
 cell budgets, pair limits, both sinks, 2D and 3D. The corpus is committed; run this again
 only when the layout of fuzz_detect.c changes:  python3 tests/fuzz/make_seeds.py
+Files of the corpus this does not write are the fuzzers' findings, kept as regressions:
+step_to_front_2d (a time step that moves an element before the first of the last cell order;
+nbs__cs_rekey's merge lost it).
 """
 import base64
 import os
