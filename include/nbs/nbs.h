@@ -217,9 +217,9 @@ NBS_API nbs_detect_def nbs_default_detect_def(void);
 
 /* Finds the pairs of `in`. def may be NULL for the defaults.
  * Time steps: cellsort (and auto, when it runs cellsort) keeps the cell order it sorted the
- * elements into. The next detection of the same n reads the elements in that order, and
+ * elements into. The next detection of the same n computes each element's cell again, and
  * when they have moved little since (a time step) it re-sorts only the few that changed
- * place instead of sorting all of them. The pairs and their order are exactly those of a
+ * place and merges them into that order, instead of sorting all of them. The pairs and their order are exactly those of a
  * detection from scratch; only the time differs. Inputs that are not a later state of the
  * same elements are recognised early and sorted from scratch. def.fresh = 1 turns it off.
  * Without a callback the pairs replace the context's buffer (nbs_pairs); with one they are
