@@ -1661,21 +1661,24 @@ static void nbs__cs_gather(const nbs__cs *c, const nbs__run *run, const uint64_t
   const uint64_t emask = c->imask;
   const bool packed = c->idx == NULL;
   uint64_t *key = c->key;
-  if (nbs__cs_input_bytes(c) <= NBS__CS_PREFETCH_MIN) {
-    double *restrict xs = c->xs, *restrict ys = c->ys, *restrict zs = c->zs;
-    double *restrict rs = c->rs;
+  const bool small = nbs__cs_input_bytes(c) <= NBS__CS_PREFETCH_MIN;
+  if (small && src) { /* no restrict: src may be xs */
+    double *xs = c->xs, *ys = c->ys, *zs = c->zs, *rs = c->rs;
     const double *r = run->r;
-    if (src) {
 #if defined(_OPENMP)
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
 #endif
-      for (int32_t p = 0; p < n; p++) {
-        const uint64_t w = src[p];
-        key[p] = w;
-        nbs__cs_place(xs, ys, zs, rs, x, r, dim, p, (int32_t)(w & emask));
-      }
-      return;
+    for (int32_t p = 0; p < n; p++) {
+      const uint64_t w = src[p];
+      key[p] = w;
+      nbs__cs_place(xs, ys, zs, rs, x, r, dim, p, (int32_t)(w & emask));
     }
+    return;
+  }
+  if (small) {
+    double *restrict xs = c->xs, *restrict ys = c->ys, *restrict zs = c->zs;
+    double *restrict rs = c->rs;
+    const double *r = run->r;
     const uint64_t *restrict kr = key;
 #if defined(_OPENMP)
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
