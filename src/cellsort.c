@@ -1915,8 +1915,7 @@ static void nbs__cs_keys_of(const nbs__cs *c, uint32_t *keys, int threads) {
  * it. Returns false, having written nothing the caller needs, when more than n /
  * NBS__CS_WARM_SHARE keys changed. */
 static bool nbs__cs_rekey(const nbs__cs *c, const nbs__run *run, const nbs__cs_keying *kg,
-                          int bits, uint32_t *keys, uint32_t *hist, int threads,
-                          int64_t *moved) {
+                          uint32_t *keys, uint32_t *hist, int threads, int64_t *moved) {
   const int32_t n = c->n;
   const int dim = c->dim;
   const int64_t limit = n / NBS__CS_WARM_SHARE, share = limit / threads;
@@ -1964,8 +1963,9 @@ static bool nbs__cs_rekey(const nbs__cs *c, const nbs__run *run, const nbs__cs_k
     nbs__cs_gather(c, run, NULL, threads);
     return true;
   }
-  /* 2 */
-  const nbs__digits dg = nbs__radix_digits(bits + 32);
+  /* 2: by the whole word, not by this detection's key bits: the old words' keys fit the last
+   * detection's cells, which may have needed more bits (a layer more, say) than these */
+  const nbs__digits dg = nbs__radix_digits(63);
   nbs__radix(R, NULL, scratch, NULL, R, NULL, (int32_t)m, 0, dg, hist, 1, NULL, 0);
   nbs__radix(S, NULL, scratch, NULL, S, NULL, (int32_t)m, 0, dg, hist, 1, NULL, 0);
   /* 3 */
@@ -2815,7 +2815,7 @@ nbs_status nbs__cellsort(nbs__run *run) {
       if (eb == 32) {
         uint32_t *ek = (uint32_t *)(void *)(w + at[0]);
         if (!keys) nbs__cs_keys_of(&c, ek, threads);
-        warm = nbs__cs_rekey(&c, run, &kg, bits, ek, hist, threads, &run->moved);
+        warm = nbs__cs_rekey(&c, run, &kg, ek, hist, threads, &run->moved);
         ctx->cs_keys = warm;
       } else {
         warm = nbs__cs_warm(&c, run, &kg, eb, bits, (uint64_t *)(void *)(w + at[0]), hist,

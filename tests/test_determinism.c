@@ -684,6 +684,41 @@ static void test_time_steps(void) {
     CHECK_MSG(st.reused_order == reused[k], "%s: reused %d", what, st.reused_order);
   }
   nbs_context_destroy(bctx);
+  /* The cells grow and shrink back, with few keys changed. 500 elements in a box whose keys
+   * take 13 bits (3D: 14 x 6 x 6 diameters, 4 + 3 bits of x with its sub-cells, 3 of y, 3
+   * of z; 2D: 26 x 26, 5 + 3 and 5): with the element's 32, 45 bits, which the radix sort
+   * takes in exactly 5 passes of 9. Element 0 goes to 10 (2D: 40) above the others' lowest
+   * z (y), so that z takes a bit more, and back, with elements 1-3 moved a sub-cell there and
+   * back too. The step back sorts the changed elements' old words, whose keys took 14 bits,
+   * with the new ones: sorted by this detection's 45 bits only, element 0's old word came
+   * first and the merge kept elements 1-3 twice (found by the fuzzer, n = 50). The rows stay
+   * along x (z, y stays under twice its cells). */
+  for (int dim = 2; dim <= 3 && !test_failures; dim++) {
+    nbs_context *gctx;
+    ASSERT_OK(nbs_context_create(NULL, &gctx));
+    const double side[3] = {dim == 3 ? 14.0 : 26.0, dim == 3 ? 6.0 : 26.0, 6.0};
+    scene gs = det_scene(DET_UNIFORM, dim, 500, 1.0, 1.18, 46);
+    for (int64_t e = 0; e < gs.n; e++) {
+      for (int a = 0; a < dim; a++) {
+        double *v = &gs.coords[e * dim + a];
+        *v = 1.18 + (*v - 1.18) * side[a];
+      }
+    }
+    const double keep0 = gs.coords[dim - 1];
+    for (int k = 0; k < 4 && !test_failures; k++) {
+      if (k == 2 || k == 3) {
+        gs.coords[dim - 1] = k == 2 ? 1.18 + (dim == 3 ? 10.0 : 40.0) : keep0;
+        for (int e = 1; e <= 3; e++) gs.coords[e * dim] += k == 2 ? 0.2 : -0.2;
+      }
+      char what[64];
+      snprintf(what, sizeof what, "cells growing and shrinking, %dD, step %d", dim, k);
+      det_step(gctx, ref, &gs, NBS_CELLSORT, NBS_MODE_CONTACTS, false, &st, what);
+      CHECK_MSG(st.reused_order == (k > 0) && (k < 2 || st.moved >= 2),
+                "%s: reused %d, moved %lld", what, st.reused_order, (long long)st.moved);
+    }
+    scene_free(&gs);
+    nbs_context_destroy(gctx);
+  }
   /* An input over 8 MiB (cellsort's NBS__CS_PREFETCH_MIN), where the gathers prefetch:
    * the gather from scratch and that of nbs__cs_rekey, with one thread and two. */
   for (int threads = 1; threads <= 2 && !test_failures; threads++) {

@@ -9,7 +9,8 @@ cell budgets, pair limits, both sinks, 2D and 3D. The corpus is committed; run t
 only when the layout of fuzz_detect.c changes:  python3 tests/fuzz/make_seeds.py
 Files of the corpus this does not write are the fuzzers' findings, kept as regressions:
 step_to_front_2d (a time step that moves an element before the first of the last cell order;
-nbs__cs_rekey's merge lost it).
+nbs__cs_rekey's merge lost it), step_wider_cells_3d (a step after one whose cells took a bit
+more of the key: nbs__cs_rekey sorted the old words by the new key's bits).
 """
 import base64
 import os
