@@ -1414,7 +1414,6 @@ typedef struct nbs__cs_keys8 {
   __m512i i1[3], i2[3]; /* per key axis: from the first two registers, then the third */
   __m512d lo[3], inv[3];
   __m128i sy, sz;
-  int dim;
 } nbs__cs_keys8;
 
 static inline NBS__CS_AVX512_TARGET void nbs__cs_keys8_init(nbs__cs_keys8 *v,
@@ -1434,7 +1433,6 @@ static inline NBS__CS_AVX512_TARGET void nbs__cs_keys8_init(nbs__cs_keys8 *v,
   }
   v->sy = _mm_cvtsi32_si128(kg->sy);
   v->sz = _mm_cvtsi32_si128(kg->sz);
-  v->dim = dim;
 }
 
 /* The keys of the 8 elements whose coordinates start at x8. */
@@ -1868,17 +1866,6 @@ static void nbs__cs_gather(const nbs__cs *c, const nbs__run *run, const uint64_t
   }
 }
 
-/* The number of words of the sorted a[0, len) below v. */
-static int64_t nbs__cs_rank(const uint64_t *a, int64_t len, uint64_t v) {
-  int64_t lo = 0, hi = len;
-  while (lo < hi) {
-    const int64_t mid = lo + (hi - lo) / 2;
-    if (a[mid] < v) lo = mid + 1;
-    else hi = mid;
-  }
-  return lo;
-}
-
 /* keys[e] = the key of element e in the order of key[], whose words' low half is the
  * element alone: where the last detection did not leave them (a detection from scratch),
  * for nbs__cs_rekey. A scatter, about a nanosecond per element at N = 1e6, paid by the
@@ -1974,8 +1961,8 @@ static bool nbs__cs_rekey(const nbs__cs *c, const nbs__run *run, const nbs__cs_k
   for (int t = 0; t <= threads; t++) {
     /* the first part takes the words of S below key[0] too, the last those above key[n - 1] */
     ib[t] = nbs__chunk(n, t, threads);
-    rb[t] = t == 0 ? 0 : t == threads ? m : nbs__cs_rank(R, m, key[ib[t]]);
-    sb[t] = t == 0 ? 0 : t == threads ? m : nbs__cs_rank(S, m, key[ib[t]]);
+    rb[t] = t == 0 ? 0 : t == threads ? m : nbs__cs_lower(R, (int32_t)m, key[ib[t]]);
+    sb[t] = t == 0 ? 0 : t == threads ? m : nbs__cs_lower(S, (int32_t)m, key[ib[t]]);
   }
 #if defined(_OPENMP)
 #pragma omp parallel num_threads(threads) if (threads > 1)
