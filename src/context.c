@@ -406,7 +406,11 @@ static nbs_status nbs__detect(nbs_context *ctx, const nbs_input *in, const nbs_d
   run.callback = d.callback;
   run.user = d.user;
   run.fresh = d.fresh != 0;
-  NBS__TRY(nbs__prepare(&run, in));
+  ctx->cs_stepped = false;
+  NBS__TRY(nbs__prepare_args(&run, in));
+  /* A time step of cellsort reads the input once, validating it and measuring its bounds
+   * as it computes each element's key (nbs__cellsort_step); else input.c's pass. */
+  if (!nbs__cellsort_step(&run, in, d.algorithm)) NBS__TRY(nbs__prepare_scan(&run, in));
 
   nbs_algorithm algo = d.algorithm == NBS_AUTO ? nbs__choose(&run) : d.algorithm;
   run.ran = algo;

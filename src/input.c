@@ -188,6 +188,11 @@ static int32_t nbs__scan_radii_threads(const double *r, int32_t n, int threads, 
 }
 
 nbs_status nbs__prepare(nbs__run *run, const nbs_input *in) {
+  NBS__TRY(nbs__prepare_args(run, in));
+  return nbs__prepare_scan(run, in);
+}
+
+nbs_status nbs__prepare_args(nbs__run *run, const nbs_input *in) {
   nbs_context *ctx = run->ctx;
   if (in->dim != 2 && in->dim != 3) {
     return nbs__fail(ctx, NBS_ERR_DIM, -1, "dimension %d: it must be 2 or 3", in->dim);
@@ -226,9 +231,15 @@ nbs_status nbs__prepare(nbs__run *run, const nbs_input *in) {
   if (n == 0) {
     g->edge = in->radii ? 1.0 : in->diameter;
     g->inv_edge = 1.0 / g->edge;
-    return NBS_OK;
   }
+  return NBS_OK;
+}
 
+nbs_status nbs__prepare_scan(nbs__run *run, const nbs_input *in) {
+  nbs_context *ctx = run->ctx;
+  const int dim = run->dim;
+  const int32_t n = run->n;
+  if (n == 0) return NBS_OK;
   /* The pass: every coordinate finite, every radius finite and > 0; box and rmax. */
   double lo[3], hi[3];
   const int threads = nbs__threads(ctx, n / NBS__SCAN_MIN_PER_THREAD);
@@ -252,9 +263,18 @@ nbs_status nbs__prepare(nbs__run *run, const nbs_input *in) {
   } else {
     rmax = 0.5 * in->diameter;
   }
+  nbs__grid_measured(run, lo, hi, rmax);
+  return NBS_OK;
+}
+
+void nbs__grid_measured(nbs__run *run, const double lo[3], const double hi[3], double rmax) {
+  nbs__grid *g = &run->grid;
+  const int dim = run->dim;
   g->rmax = rmax;
 
-  double dmax = in->radii ? 2.0 * rmax : in->diameter;
+  /* without radii rmax is half the diameter, and twice it the diameter again exactly
+   * wherever it decides the edge (above NBS__EDGE_FLOOR) */
+  const double dmax = 2.0 * rmax;
   if (!(dmax * dmax <= DBL_MAX)) {
     g->edge = INFINITY;
     g->inv_edge = 0.0;
@@ -281,7 +301,6 @@ nbs_status nbs__prepare(nbs__run *run, const nbs_input *in) {
       g->fits = false;
     }
   }
-  return NBS_OK;
 }
 
 void nbs__axis_order(int dim, const int64_t count[3], int slot, int at[3]) {

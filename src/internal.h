@@ -87,6 +87,17 @@ static inline int32_t nbs__cell(const nbs__grid *g, const double *x, int axis) {
 
 #define NBS__THREADS_MAX 64
 
+/* cellsort's keying of a cell order, as the context keeps it for the next detection (see
+ * nbs_context.cs_kept and cellsort.c's nbs__cs_keying, which reads it): the grid with its
+ * axes in the key's order and its origin anchored, the x sub-cells' scale, which coordinate
+ * each of the key's axes reads, and where iy and iz start in the key. */
+typedef struct nbs__cs_kept {
+  nbs__grid g;
+  double lo_x, inv_fine;
+  int c[3];
+  int dim, sy, sz;
+} nbs__cs_kept;
+
 struct nbs_context {
   nbs_allocator allocator;
   size_t cell_budget;
@@ -122,6 +133,13 @@ struct nbs_context {
    * detections sort from scratch without trying: 2, 4, ... 64 after 1, 2, ... 6 failures in
    * a row (cs_warm_fails), so that steps that keep failing stop paying for the try. */
   int cs_warm_wait, cs_warm_fails;
+  /* The keying of that order, where cs_keys may say its keys are there (cs_kept_ok): the
+   * next detection's time-step pass (nbs__cellsort_step) computes every element's key with
+   * it while it reads the input, in place of input.c's pass, and the keys stand if this
+   * detection's own keying comes out the same. cs_stepped says whether the last detection
+   * took that pass (read by the tests). */
+  nbs__cs_kept cs_kept;
+  bool cs_kept_ok, cs_stepped;
   /* How the last cellsort detection sorted its keys: -1 by the whole key (and before any),
    * else by its crowded core, this many elements (the outliers) apart (nbs__cs_core). Read
    * by the tests, which cannot see it through the API. */
@@ -182,6 +200,11 @@ typedef struct nbs__run {
   bool compressed;
   int64_t cells[3];
   bool fresh;         /* nbs_detect_def.fresh */
+  /* The input was read by cellsort's time-step pass (nbs__cellsort_step) instead of
+   * input.c's: the grid comes from the bounds it measured, and the work block holds the old
+   * and new words of the step_moved elements whose key changed. */
+  bool stepped;
+  int64_t step_moved;
   bool reused_order;  /* cellsort started from the last cell order */
   int64_t moved;      /* the elements it sorted again */
 } nbs__run;
@@ -249,8 +272,17 @@ nbs_status nbs__fail(nbs_context *ctx, nbs_status status, int64_t element, const
   } while (0)
 
 /* ---- input (input.c) ---- */
-/* Validates `in` and fills run->grid. Names the first offending element. */
+/* Validates `in` and fills run->grid. Names the first offending element. In two parts:
+ * nbs__prepare_args checks what needs no pass over the elements (dimension, count,
+ * pointers, diameter), sets run's dim, n, x, r, d2 and, for n = 0, the grid;
+ * nbs__prepare_scan is the pass over the elements (every number finite, radii > 0) and the
+ * grid from the bounds it measured (nbs__grid_measured). */
 nbs_status nbs__prepare(nbs__run *run, const nbs_input *in);
+nbs_status nbs__prepare_args(nbs__run *run, const nbs_input *in);
+nbs_status nbs__prepare_scan(nbs__run *run, const nbs_input *in);
+/* run->grid from the bounding box [lo, hi] of the n > 0 elements, all finite, and their
+ * largest radius rmax (half the diameter without radii). */
+void nbs__grid_measured(nbs__run *run, const double lo[3], const double hi[3], double rmax);
 /* An order of the axes for an algorithm whose structure nests them (NBS's lists, cellsort's
  * key), with count[a] cells or lists on coordinate axis a: its axis i is coordinate at[i].
  * Coordinate i at each place i, except at `slot`, where the axis that nests worst when
@@ -338,6 +370,11 @@ bool nbs__nbs_fold(const nbs__run *run, int64_t lists[3]);
  * of steps 3 and 4 go down them side by side. */
 int nbs__nbs_zways(int dim, int64_t nl, int64_t n);
 nbs_status nbs__cellsort(nbs__run *run);
+/* A time step's pass over the input (see cellsort.c), in place of nbs__prepare_scan where
+ * the context holds a cell order it can start from and `asked` may run cellsort; returns
+ * whether it took it (run->stepped, run->grid set). Else nothing was read, or what was is
+ * discarded, and the caller runs nbs__prepare_scan. run: as nbs__prepare_args left it. */
+bool nbs__cellsort_step(nbs__run *run, const nbs_input *in, nbs_algorithm asked);
 /* True when cellsort's 64-bit cell key can index the grid (auto's test). */
 bool nbs__cellsort_fits(const nbs__grid *g);
 /* Bytes of cellsort's work block for n elements (with radii or not) and `threads` threads:

@@ -608,6 +608,9 @@ static void test_time_steps(void) {
               STEP("small step");
               CHECK_EQ(st.reused_order, 1);
               CHECK_MSG(ctx->cs_keys == !far, "%s: cs_keys %d", what, (int)ctx->cs_keys);
+              /* and with keys, without radii, the step read the input once */
+              CHECK_MSG(ctx->cs_stepped == (!far && kind != DET_RADII), "%s: stepped %d", what,
+                        (int)ctx->cs_stepped);
               moved += st.moved;
             }
             CHECK_MSG(moved > 0, "%s: no element changed place in six steps", what);
@@ -746,6 +749,162 @@ static void test_time_steps(void) {
   scene_free(&sr);
   nbs_context_destroy(ctx);
   nbs_context_destroy(ref);
+}
+
+/* The time step's pass over the input (nbs__cellsort_step), which replaces input.c's
+ * where the context has an order and its keys: it computes the keys with the last
+ * detection's keying and measures the box, and the keys stand only if this detection's
+ * keying is the same. Every step gives the bytes of a detection from scratch, or its error:
+ *  - a coordinate that is not finite, at the start, in the middle and among the last
+ *    elements (the AVX-512 pass takes 8 at a time, the rest one by one), on each axis: the
+ *    same status, element and message as input.c's pass gives a fresh context; the steps
+ *    after it take up the order again;
+ *  - an element below the grid's origin, or past the bits of a key's field, where the pass
+ *    stops (stepped 0), and the box growing or shrinking within them, where it does not;
+ *  - the diameter changed (the keying is not the same: from scratch);
+ *  - another algorithm between steps, and auto choosing another after the pass;
+ * with the default kernel and the generic one (whose pass is the scalar loop), one thread
+ * and two. */
+static void test_step_pass(void) {
+  for (int dim = 2; dim <= 3; dim++) {
+    for (int kernel = 0; kernel < 2; kernel++) {
+      for (int threads = 1; threads <= 2; threads++) {
+        nbs_context_def cdef = nbs_default_context_def();
+        cdef.threads = threads;
+        nbs_context *ctx, *ref;
+        if (kernel) ASSERT_TRUE(setenv("NBS_SIMD", "generic", 1) == 0);
+        nbs_status cs = nbs_context_create(&cdef, &ctx);
+        unsetenv("NBS_SIMD");
+        ASSERT_OK(cs);
+        ASSERT_OK(nbs_context_create(&cdef, &ref));
+        /* 45,003 elements: two threads' parts, and 3 past the last 8 */
+        const int64_t n = 45003;
+        const double box = (dim == 2 ? 140.0 : 26.0) * pow((double)n / 20000.0, 1.0 / dim);
+        scene s = det_scene(DET_UNIFORM, dim, n, box, 1.18, 60 + dim);
+        uint64_t rng = 79;
+        nbs_stats st;
+        char what[160];
+#define PSTEP(label, stepped)                                                                 \
+  do {                                                                                        \
+    snprintf(what, sizeof what, "%dD, kernel %d, %d threads: %s", dim, kernel, threads,      \
+             label);                                                                          \
+    det_step(ctx, ref, &s, NBS_AUTO, NBS_MODE_CONTACTS, false, &st, what);                   \
+    if (stepped >= 0) {                                                                       \
+      CHECK_MSG((int)ctx->cs_stepped == (stepped), "%s: stepped %d", what,                  \
+                (int)ctx->cs_stepped);                                                        \
+    }                                                                                         \
+  } while (0)
+        PSTEP("first", 0);
+        PSTEP("second (writes the keys)", 0);
+        det_move(&s, 0, 5, 0.01, &rng);
+        PSTEP("small step", 1);
+        CHECK_MSG(st.moved > 0, "%s: moved %lld", what, (long long)st.moved);
+        /* a bad number: the same error as from scratch, then the steps go on */
+        const int64_t at[] = {0, n / 2 + 3, n - 2};
+        const double bad[] = {NAN, INFINITY, -INFINITY};
+        for (size_t b = 0; b < 3 && !test_failures; b++) {
+          for (int a = 0; a < dim && !test_failures; a++) {
+            double *v = &s.coords[at[b] * dim + a];
+            const double keep = *v;
+            *v = bad[(b + (size_t)a) % 3];
+            nbs_input in = scene_input(&s);
+            nbs_detect_def def = nbs_default_detect_def();
+            const nbs_status got = nbs_detect(ctx, &in, &def);
+            def.fresh = 1;
+            const nbs_status want = nbs_detect(ref, &in, &def);
+            snprintf(what, sizeof what, "%dD, kernel %d, %d threads: element %lld axis %d",
+                     dim, kernel, threads, (long long)at[b], a);
+            CHECK_MSG(got == NBS_ERR_COORD && want == NBS_ERR_COORD, "%s: %s, %s", what,
+                      nbs_status_name(got), nbs_status_name(want));
+            CHECK_MSG(nbs_context_error_element(ctx) == at[b] &&
+                          strcmp(nbs_context_error(ctx), nbs_context_error(ref)) == 0,
+                      "%s: element %lld (%s), from scratch %lld (%s)", what,
+                      (long long)nbs_context_error_element(ctx), nbs_context_error(ctx),
+                      (long long)nbs_context_error_element(ref), nbs_context_error(ref));
+            *v = keep;
+            PSTEP("after the bad number", -1);
+            CHECK_EQ(st.reused_order, 1);
+            det_move(&s, b, 7, 0.01, &rng);
+            PSTEP("the step after that", 1);
+          }
+        }
+        /* below the origin (a lattice point under the lowest coordinate): the pass stops */
+        double *lowest = &s.coords[5 * dim];
+        const double keep_low = *lowest;
+        *lowest = 1.18 - 2.0;
+        PSTEP("an element below the origin", 0);
+        *lowest = keep_low;
+        PSTEP("and back", -1);
+        PSTEP("and again", -1);
+        det_move(&s, 1, 9, 0.01, &rng);
+        PSTEP("a small step after those", -1);
+        /* past the bits of x's field (the rows' axis: the key's x), then back */
+        double *far = &s.coords[7 * dim];
+        const double keep_far = *far;
+        *far = 1.18 + 4.0 * box;
+        PSTEP("an element past the key's bits", -1);
+        *far = keep_far;
+        for (int k = 0; k < 4; k++) PSTEP("back", -1);
+        det_move(&s, 2, 9, 0.01, &rng);
+        PSTEP("small step", 1);
+        for (int k = 0; k < 2; k++) {
+          det_move(&s, 3, 11, 0.01, &rng);
+          PSTEP("small step", 1);
+        }
+        /* the diameter: another keying, from scratch, then steps again */
+        s.diameter = 1.0 + 0x1p-20;
+        PSTEP("another diameter", 0);
+        CHECK_EQ(st.reused_order, 0);
+        PSTEP("the same diameter", 0);
+        det_move(&s, 4, 7, 0.01, &rng);
+        PSTEP("small step", 1);
+        /* another algorithm between */
+        pair_list scratch;
+        ASSERT_OK(detect_raw(ctx, &s, NBS_SORTING, NBS_MODE_CONTACTS, &scratch));
+        pair_list_free(&scratch);
+        CHECK_EQ(ctx->cs_stepped, 0);
+        PSTEP("after sorting", 0);
+        PSTEP("and again", 0);
+        det_move(&s, 5, 7, 0.01, &rng);
+        PSTEP("small step", 1);
+#undef PSTEP
+        scene_free(&s);
+        nbs_context_destroy(ctx);
+        nbs_context_destroy(ref);
+        if (test_failures) return;
+      }
+    }
+    /* The pass reads the input where auto may yet choose another algorithm: 32 elements,
+     * which auto checks directly (NBS__AUTO_DIRECT_MAX), after cellsort asked for by name.
+     * Two elements change places (two keys: n / 16), auto runs, and cellsort again with
+     * nothing moved: the keys the pass rewrote are not the order's, and taken for them,
+     * the two would keep their old places in the order, with their new coordinates. */
+    nbs_context *ctx, *ref;
+    ASSERT_OK(nbs_context_create(NULL, &ctx));
+    ASSERT_OK(nbs_context_create(NULL, &ref));
+    scene s = det_scene(DET_UNIFORM, dim, 32, 4.0, 1.18, 70 + dim);
+    nbs_stats st;
+    const nbs_algorithm seq[] = {NBS_CELLSORT, NBS_CELLSORT, NBS_AUTO, NBS_CELLSORT,
+                                 NBS_CELLSORT};
+    for (size_t k = 0; k < sizeof seq / sizeof *seq && !test_failures; k++) {
+      if (k == 2) {
+        for (int a = 0; a < dim; a++) {
+          const double t = s.coords[5 * dim + a];
+          s.coords[5 * dim + a] = s.coords[9 * dim + a];
+          s.coords[9 * dim + a] = t;
+        }
+      }
+      char what[96];
+      snprintf(what, sizeof what, "%dD, 32 elements, step %zu (%s)", dim, k,
+               nbs_algorithm_name(seq[k]));
+      det_step(ctx, ref, &s, seq[k], NBS_MODE_CONTACTS, false, &st, what);
+      CHECK_MSG(st.algorithm == (k == 2 ? NBS_DIRECT : NBS_CELLSORT), "%s: ran %s", what,
+                nbs_algorithm_name(st.algorithm));
+    }
+    scene_free(&s);
+    nbs_context_destroy(ctx);
+    nbs_context_destroy(ref);
+  }
 }
 
 /* Kernels: cellsort's generic kernel (asked for with NBS_SIMD=generic, read when a context
@@ -992,6 +1151,7 @@ int main(int argc, char **argv) {
       {"partition", test_partition},
       {"kernels", test_kernels},
       {"time_steps", test_time_steps},
+      {"step_pass", test_step_pass},
       {"golden_hashes", test_golden_hashes},
       {"axis_order", test_axis_order},
   };
