@@ -84,7 +84,7 @@
  *    their new) and merged into the last order's words, 8 bytes per element; and the
  *    coordinates are gathered once, as from scratch. That replaces the key pass and the
  *    radix sort (steps 1-2) by a pass like the key pass and a merge of words.
- *    Where the context has the keys and no radii are given, that pass also replaces
+ *    Where the context has the keys, that pass also replaces
  *    input.c's pass over the input: it runs with the last detection's keying, before the
  *    grid is known, and measures the bounding box as it goes; its keys stand where the
  *    grid gives the same keying, which it does but where the box crosses a lattice line
@@ -2860,18 +2860,21 @@ static bool nbs__cs_kept_same(const nbs__cs_kept *kp, const nbs__cs_keying *kg) 
  * scratch, as it would have once nbs__cs_rekey had found too many keys changed. The pass
  * stops at the first element outside the keying's box, or with a coordinate that is not
  * finite (nbs__cs_changed_box): the caller then runs input.c's pass, which names a bad
- * number as it always does. Radii have a pass of their own, and keep input.c's.
+ * number as it always does. Radii, where given, are read after it by input.c's pass of
+ * them, whose largest the grid needs too (a bad one: input.c's passes then run again, to
+ * name it as they always do).
  * Measured (steps of 1e-3, one thread, interleaved with the build before, min of 8-12, ns
  * per element, the same hashes): 3D N = 1e6 28.65 -> 27.07, 28.66 -> 27.80 and 28.36 ->
  * 27.80 in three runs, two threads 15.10 -> 14.63, N = 1e5 22.87 -> 22.46; 2D N = 1e6
  * 14.00 / 13.98 and 13.69 / 13.78, no faster: by perf the pass saves its 0.5 ns there too,
- * and the merge and the gather after it take about as much more (not understood). */
+ * and the merge and the gather after it take about as much more (not understood). With
+ * radii (the scene `wide`, 3D N = 1e6) 49.36 -> 48.46. */
 bool nbs__cellsort_step(nbs__run *run, const nbs_input *in, nbs_algorithm asked) {
   nbs_context *ctx = run->ctx;
   const int32_t n = run->n;
   const int dim = run->dim;
   run->stepped = false;
-  if (run->fresh || run->r || n < 2 || (asked != NBS_AUTO && asked != NBS_CELLSORT)) {
+  if (run->fresh || n < 2 || (asked != NBS_AUTO && asked != NBS_CELLSORT)) {
     return false;
   }
   if (!ctx->cs_kept_ok || !ctx->cs_keys || ctx->cs_warm_wait > 0 ||
@@ -2881,7 +2884,9 @@ bool nbs__cellsort_step(nbs__run *run, const nbs_input *in, nbs_algorithm asked)
   }
   const int threads = nbs__cs_threads(run);
   size_t at[4], stride;
-  if (nbs__cs_layout(dim, n, false, threads, at, &stride) > ctx->work_size) return false;
+  if (nbs__cs_layout(dim, n, run->r != NULL, threads, at, &stride) > ctx->work_size) {
+    return false;
+  }
   char *w = nbs__cs_base(ctx->work);
   uint32_t *keys = (uint32_t *)(void *)(w + at[0]);
   const int64_t limit = n / NBS__CS_WARM_SHARE, share = limit / threads;
@@ -2949,7 +2954,13 @@ bool nbs__cellsort_step(nbs__run *run, const nbs_input *in, nbs_algorithm asked)
       if (boxes[t].hi[a] > hi[a]) hi[a] = boxes[t].hi[a];
     }
   }
-  nbs__grid_measured(run, lo, hi, 0.5 * in->diameter);
+  /* the radii, where given, by input.c's pass of them: their largest sizes the cells */
+  double rmax = 0.5 * in->diameter;
+  if (run->r && !nbs__radii_max(run, &rmax)) {
+    ctx->cs_keys = false; /* input.c's passes name the bad radius */
+    return false;
+  }
+  nbs__grid_measured(run, lo, hi, rmax);
   /* some keys are this step's: not the order's until nbs__cellsort has used them (an error
    * before it, or another algorithm, leaves them unused) */
   ctx->cs_keys = false;

@@ -187,6 +187,11 @@ static int32_t nbs__scan_radii_threads(const double *r, int32_t n, int threads, 
   return -1;
 }
 
+bool nbs__radii_max(const nbs__run *run, double *rmax) {
+  const int threads = nbs__threads(run->ctx, run->n / NBS__SCAN_MIN_PER_THREAD);
+  return nbs__scan_radii_threads(run->r, run->n, threads, rmax) < 0;
+}
+
 nbs_status nbs__prepare(nbs__run *run, const nbs_input *in) {
   NBS__TRY(nbs__prepare_args(run, in));
   return nbs__prepare_scan(run, in);

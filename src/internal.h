@@ -283,6 +283,9 @@ nbs_status nbs__prepare_scan(nbs__run *run, const nbs_input *in);
 /* run->grid from the bounding box [lo, hi] of the n > 0 elements, all finite, and their
  * largest radius rmax (half the diameter without radii). */
 void nbs__grid_measured(nbs__run *run, const double lo[3], const double hi[3], double rmax);
+/* input.c's pass over run's n > 0 radii alone: whether every one is a finite number > 0,
+ * and then the largest in *rmax. */
+bool nbs__radii_max(const nbs__run *run, double *rmax);
 /* An order of the axes for an algorithm whose structure nests them (NBS's lists, cellsort's
  * key), with count[a] cells or lists on coordinate axis a: its axis i is coordinate at[i].
  * Coordinate i at each place i, except at `slot`, where the axis that nests worst when

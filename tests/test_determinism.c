@@ -608,9 +608,8 @@ static void test_time_steps(void) {
               STEP("small step");
               CHECK_EQ(st.reused_order, 1);
               CHECK_MSG(ctx->cs_keys == !far, "%s: cs_keys %d", what, (int)ctx->cs_keys);
-              /* and with keys, without radii, the step read the input once */
-              CHECK_MSG(ctx->cs_stepped == (!far && kind != DET_RADII), "%s: stepped %d", what,
-                        (int)ctx->cs_stepped);
+              /* and with keys the step read the input once */
+              CHECK_MSG(ctx->cs_stepped == !far, "%s: stepped %d", what, (int)ctx->cs_stepped);
               moved += st.moved;
             }
             CHECK_MSG(moved > 0, "%s: no element changed place in six steps", what);
@@ -763,11 +762,13 @@ static void test_time_steps(void) {
  *    stops (stepped 0), and the box growing or shrinking within them, where it does not;
  *  - the diameter changed (the keying is not the same: from scratch);
  *  - another algorithm between steps, and auto choosing another after the pass;
+ *  - with radii, a bad radius (the same error), and a radius above the largest;
  * with the default kernel and the generic one (whose pass is the scalar loop), one thread
  * and two. */
 static void test_step_pass(void) {
   for (int dim = 2; dim <= 3; dim++) {
-    for (int kernel = 0; kernel < 2; kernel++) {
+    for (int kr = 0; kr < 4; kr++) {
+      const int kernel = kr % 2, radii = kr / 2;
       for (int threads = 1; threads <= 2; threads++) {
         nbs_context_def cdef = nbs_default_context_def();
         cdef.threads = threads;
@@ -780,14 +781,14 @@ static void test_step_pass(void) {
         /* 45,003 elements: two threads' parts, and 3 past the last 8 */
         const int64_t n = 45003;
         const double box = (dim == 2 ? 140.0 : 26.0) * pow((double)n / 20000.0, 1.0 / dim);
-        scene s = det_scene(DET_UNIFORM, dim, n, box, 1.18, 60 + dim);
+        scene s = det_scene(radii ? DET_RADII : DET_UNIFORM, dim, n, box, 1.18, 60 + dim);
         uint64_t rng = 79;
         nbs_stats st;
         char what[160];
 #define PSTEP(label, stepped)                                                                 \
   do {                                                                                        \
-    snprintf(what, sizeof what, "%dD, kernel %d, %d threads: %s", dim, kernel, threads,      \
-             label);                                                                          \
+    snprintf(what, sizeof what, "%dD, kernel %d, radii %d, %d threads: %s", dim, kernel,     \
+             radii, threads, label);                                                          \
     det_step(ctx, ref, &s, NBS_AUTO, NBS_MODE_CONTACTS, false, &st, what);                   \
     if (stepped >= 0) {                                                                       \
       CHECK_MSG((int)ctx->cs_stepped == (stepped), "%s: stepped %d", what,                  \
@@ -812,8 +813,8 @@ static void test_step_pass(void) {
             const nbs_status got = nbs_detect(ctx, &in, &def);
             def.fresh = 1;
             const nbs_status want = nbs_detect(ref, &in, &def);
-            snprintf(what, sizeof what, "%dD, kernel %d, %d threads: element %lld axis %d",
-                     dim, kernel, threads, (long long)at[b], a);
+            snprintf(what, sizeof what, "%dD, kernel %d, radii %d, %d threads: element %lld "
+                     "axis %d", dim, kernel, radii, threads, (long long)at[b], a);
             CHECK_MSG(got == NBS_ERR_COORD && want == NBS_ERR_COORD, "%s: %s, %s", what,
                       nbs_status_name(got), nbs_status_name(want));
             CHECK_MSG(nbs_context_error_element(ctx) == at[b] &&
@@ -827,6 +828,33 @@ static void test_step_pass(void) {
             det_move(&s, b, 7, 0.01, &rng);
             PSTEP("the step after that", 1);
           }
+        }
+        /* a bad radius (read after the coordinates): the same error as from scratch */
+        for (size_t b = 0; radii && b < 3 && !test_failures; b++) {
+          double *v = &s.radii[at[b]];
+          const double keep = *v;
+          /* with elements moved: the keys the pass rewrote must not be taken for the order's */
+          det_move(&s, (int64_t)b + 1, 5, 0.01, &rng);
+          *v = b == 0 ? 0.0 : b == 1 ? -0.25 : NAN;
+          nbs_input in = scene_input(&s);
+          nbs_detect_def def = nbs_default_detect_def();
+          const nbs_status got = nbs_detect(ctx, &in, &def);
+          def.fresh = 1;
+          const nbs_status want = nbs_detect(ref, &in, &def);
+          snprintf(what, sizeof what, "%dD, kernel %d, %d threads: radius of element %lld",
+                   dim, kernel, threads, (long long)at[b]);
+          CHECK_MSG(got == NBS_ERR_RADIUS && want == NBS_ERR_RADIUS, "%s: %s, %s", what,
+                    nbs_status_name(got), nbs_status_name(want));
+          CHECK_MSG(nbs_context_error_element(ctx) == at[b] &&
+                        strcmp(nbs_context_error(ctx), nbs_context_error(ref)) == 0,
+                    "%s: element %lld (%s), from scratch %lld (%s)", what,
+                    (long long)nbs_context_error_element(ctx), nbs_context_error(ctx),
+                    (long long)nbs_context_error_element(ref), nbs_context_error(ref));
+          *v = keep;
+          PSTEP("after the bad radius", -1);
+          CHECK_EQ(st.reused_order, 1);
+          det_move(&s, b, 7, 0.01, &rng);
+          PSTEP("the step after that", 1);
         }
         /* below the origin (a lattice point under the lowest coordinate): the pass stops */
         double *lowest = &s.coords[5 * dim];
@@ -851,8 +879,10 @@ static void test_step_pass(void) {
           det_move(&s, 3, 11, 0.01, &rng);
           PSTEP("small step", 1);
         }
-        /* the diameter: another keying, from scratch, then steps again */
-        s.diameter = 1.0 + 0x1p-20;
+        /* the diameter (with radii: a radius above the largest): another keying, from
+         * scratch, then steps again */
+        if (radii) s.radii[3] = 0.5 + 0x1p-20;
+        else s.diameter = 1.0 + 0x1p-20;
         PSTEP("another diameter", 0);
         CHECK_EQ(st.reused_order, 0);
         PSTEP("the same diameter", 0);
