@@ -1499,6 +1499,25 @@ static void nbs__cs_words512(const nbs__cs_keying *kg, const double *x, int32_t 
   else nbs__cs_words512_body(kg, x, 2, from, to, eb, k0);
 }
 
+/* The 8 keys k of elements e, e + 1, ... against keys[]: each changed one's old word to r,
+ * its new one to s (m of them so far), and keys[] updated; false past `share` of them. */
+static inline __attribute__((always_inline)) NBS__CS_AVX512_TARGET bool
+nbs__cs_note8(__m256i k, uint32_t *keys, int32_t e, uint64_t *r, uint64_t *s, int64_t *m,
+              int64_t share) {
+  unsigned ne = _mm256_cmpneq_epi32_mask(k, _mm256_loadu_si256((const void *)(keys + e)));
+  if (ne == 0) return true;
+  uint32_t kk[8];
+  _mm256_storeu_si256((void *)kk, k);
+  for (; ne; ne &= ne - 1) {
+    const int l = __builtin_ctz(ne);
+    if (*m == share) return false;
+    r[*m] = (uint64_t)keys[e + l] << 32 | (uint64_t)(e + l);
+    s[(*m)++] = (uint64_t)kk[l] << 32 | (uint64_t)(e + l);
+    keys[e + l] = kk[l];
+  }
+  return true;
+}
+
 /* Step 1 of nbs__cs_rekey for the elements [from, to), 8 at a time: returns the number of
  * changed keys, their old words to r and new ones to s, or -1 past `share` of them. */
 static inline __attribute__((always_inline)) NBS__CS_AVX512_TARGET int64_t
@@ -1510,18 +1529,7 @@ nbs__cs_changed512_body(const nbs__cs_keying *kg, const double *x, int dim, int3
   int32_t e = from;
   for (; to - e >= 8; e += 8) {
     const __m256i k = _mm512_cvtepi64_epi32(nbs__cs_key8(&v, x + (size_t)e * (size_t)dim, dim));
-    const __m256i old = _mm256_loadu_si256((const void *)(keys + e));
-    unsigned ne = _mm256_cmpneq_epi32_mask(k, old);
-    if (ne == 0) continue;
-    uint32_t kk[8];
-    _mm256_storeu_si256((void *)kk, k);
-    for (; ne; ne &= ne - 1) {
-      const int l = __builtin_ctz(ne);
-      if (m == share) return -1;
-      r[m] = (uint64_t)keys[e + l] << 32 | (uint64_t)(e + l);
-      s[m++] = (uint64_t)kk[l] << 32 | (uint64_t)(e + l);
-      keys[e + l] = kk[l];
-    }
+    if (!nbs__cs_note8(k, keys, e, r, s, &m, share)) return -1;
   }
   return nbs__cs_changed(kg, x, dim, e, to, keys, r, s, m, share);
 }
@@ -1619,18 +1627,7 @@ nbs__cs_changed512_box_body(const nbs__cs_keying *kg, const double *x, int dim, 
     }
     if (in != 0xFF) return NBS__CS_OUT;
     const __m256i k = _mm512_cvtepi64_epi32(nbs__cs_key8_of(&v, t, dim));
-    const __m256i old = _mm256_loadu_si256((const void *)(keys + e));
-    unsigned ne = _mm256_cmpneq_epi32_mask(k, old);
-    if (ne == 0) continue;
-    uint32_t kk[8];
-    _mm256_storeu_si256((void *)kk, k);
-    for (; ne; ne &= ne - 1) {
-      const int l = __builtin_ctz(ne);
-      if (m == share) return -1;
-      r[m] = (uint64_t)keys[e + l] << 32 | (uint64_t)(e + l);
-      s[m++] = (uint64_t)kk[l] << 32 | (uint64_t)(e + l);
-      keys[e + l] = kk[l];
-    }
+    if (!nbs__cs_note8(k, keys, e, r, s, &m, share)) return -1;
   }
   for (int a = 0; a < dim; a++) {
     const int ca = kg->c[a];
