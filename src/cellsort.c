@@ -1392,25 +1392,6 @@ static inline uint64_t nbs__cs_cellkey(const nbs__cs_keying *kg, const double *x
   return iz << kg->sz | iy << kg->sy | ix;
 }
 
-/* Step 1 of nbs__cs_rekey for the elements [from, to), the m changed keys before them
- * already found: each element's key again, against keys[e]; a changed one's old word to r,
- * its new one to s, and keys[e] the new key. Returns the number of changed keys, or -1 past
- * `share` of them. */
-static inline int64_t nbs__cs_changed(const nbs__cs_keying *kg, const double *x, int dim,
-                                      int32_t from, int32_t to, uint32_t *keys, uint64_t *r,
-                                      uint64_t *s, int64_t m, int64_t share) {
-  for (int32_t e = from; e < to; e++) {
-    const uint32_t k = (uint32_t)nbs__cs_cellkey(kg, x + (size_t)e * (size_t)dim);
-    if (k != keys[e]) {
-      if (m == share) return -1;
-      r[m] = (uint64_t)keys[e] << 32 | (uint64_t)e;
-      s[m++] = (uint64_t)k << 32 | (uint64_t)e;
-      keys[e] = k;
-    }
-  }
-  return m;
-}
-
 #if NBS__CS_AVX512
 /* nbs__cs_cellkey for 8 consecutive elements at once (AVX-512: F, DQ), the same operations
  * in the same order (a subtraction, a multiplication, a truncation: the same keys bit for
@@ -1518,39 +1499,19 @@ nbs__cs_note8(__m256i k, uint32_t *keys, int32_t e, uint64_t *r, uint64_t *s, in
   return true;
 }
 
-/* Step 1 of nbs__cs_rekey for the elements [from, to), 8 at a time: returns the number of
- * changed keys, their old words to r and new ones to s, or -1 past `share` of them. */
-static inline __attribute__((always_inline)) NBS__CS_AVX512_TARGET int64_t
-nbs__cs_changed512_body(const nbs__cs_keying *kg, const double *x, int dim, int32_t from,
-                        int32_t to, uint32_t *keys, uint64_t *r, uint64_t *s, int64_t share) {
-  nbs__cs_keys8 v;
-  nbs__cs_keys8_init(&v, kg);
-  int64_t m = 0;
-  int32_t e = from;
-  for (; to - e >= 8; e += 8) {
-    const __m256i k = _mm512_cvtepi64_epi32(nbs__cs_key8(&v, x + (size_t)e * (size_t)dim, dim));
-    if (!nbs__cs_note8(k, keys, e, r, s, &m, share)) return -1;
-  }
-  return nbs__cs_changed(kg, x, dim, e, to, keys, r, s, m, share);
-}
-
-NBS__CS_AVX512_TARGET
-static int64_t nbs__cs_changed512(const nbs__cs_keying *kg, const double *x, int32_t from,
-                                  int32_t to, uint32_t *keys, uint64_t *r, uint64_t *s,
-                                  int64_t share) {
-  if (kg->dim == 3) return nbs__cs_changed512_body(kg, x, 3, from, to, keys, r, s, share);
-  return nbs__cs_changed512_body(kg, x, 2, from, to, keys, r, s, share);
-}
 #endif
 
-/* A time step's pass (nbs__cellsort_step): nbs__cs_changed, reading the input in place of
- * input.c's pass. With the last detection's keying, which this detection's may not be: an
- * element may lie outside that keying's box (below its origin, or past the bits of a key's
- * field), or a coordinate may not be finite. Each element's cell positions are therefore
- * checked to lie in the box before they become integers (a conversion out of range is
- * undefined in C); the first that does not stops the pass (NBS__CS_OUT), and the detection
- * reads the input again as from scratch. Meanwhile it measures the coordinates' bounding
- * box, as input.c's pass does, into box. */
+/* Step 1 of nbs__cs_rekey for the elements [from, to), the m changed keys before them
+ * already found: each element's key again, against keys[e]; a changed one's old word to r,
+ * its new one to s, and keys[e] the new key. Returns the number of changed keys, or -1 past
+ * `share` of them. In a time step it reads the input in place of input.c's pass
+ * (nbs__cellsort_step), with the last detection's keying, which this detection's may not
+ * be: an element may lie outside that keying's box (below its origin, or past the bits of a
+ * key's field), or a coordinate may not be finite. Each element's cell positions are
+ * therefore checked to lie in the box before they become integers (a conversion out of
+ * range is undefined in C); the first that does not stops the pass (NBS__CS_OUT). With the
+ * detection's own keying every element lies in its box. Meanwhile it measures the
+ * coordinates' bounding box, as input.c's pass does, into box. */
 #define NBS__CS_OUT (-2)
 typedef struct nbs__cs_box {
   double lo[3], hi[3];
@@ -1565,7 +1526,7 @@ static void nbs__cs_box_limits(const nbs__cs_keying *kg, double lim[3]) {
   lim[2] = ldexp(1.0, 31 - top);
 }
 
-static inline int64_t nbs__cs_changed_box(const nbs__cs_keying *kg, const double *x, int dim,
+static inline int64_t nbs__cs_changed(const nbs__cs_keying *kg, const double *x, int dim,
                                           int32_t from, int32_t to, uint32_t *keys,
                                           uint64_t *r, uint64_t *s, int64_t m, int64_t share,
                                           nbs__cs_box *box) {
@@ -1599,7 +1560,7 @@ static inline int64_t nbs__cs_changed_box(const nbs__cs_keying *kg, const double
 #if NBS__CS_AVX512
 /* The same 8 elements at a time, the keys as nbs__cs_key8 computes them. */
 static inline __attribute__((always_inline)) NBS__CS_AVX512_TARGET int64_t
-nbs__cs_changed512_box_body(const nbs__cs_keying *kg, const double *x, int dim, int32_t from,
+nbs__cs_changed512_body(const nbs__cs_keying *kg, const double *x, int dim, int32_t from,
                             int32_t to, uint32_t *keys, uint64_t *r, uint64_t *s,
                             int64_t share, nbs__cs_box *box) {
   nbs__cs_keys8 v;
@@ -1635,17 +1596,17 @@ nbs__cs_changed512_box_body(const nbs__cs_keying *kg, const double *x, int dim, 
     if (l < box->lo[ca]) box->lo[ca] = l;
     if (h > box->hi[ca]) box->hi[ca] = h;
   }
-  return nbs__cs_changed_box(kg, x, dim, e, to, keys, r, s, m, share, box);
+  return nbs__cs_changed(kg, x, dim, e, to, keys, r, s, m, share, box);
 }
 
 NBS__CS_AVX512_TARGET
-static int64_t nbs__cs_changed512_box(const nbs__cs_keying *kg, const double *x, int32_t from,
+static int64_t nbs__cs_changed512(const nbs__cs_keying *kg, const double *x, int32_t from,
                                       int32_t to, uint32_t *keys, uint64_t *r, uint64_t *s,
                                       int64_t share, nbs__cs_box *box) {
   if (kg->dim == 3) {
-    return nbs__cs_changed512_box_body(kg, x, 3, from, to, keys, r, s, share, box);
+    return nbs__cs_changed512_body(kg, x, 3, from, to, keys, r, s, share, box);
   }
-  return nbs__cs_changed512_box_body(kg, x, 2, from, to, keys, r, s, share, box);
+  return nbs__cs_changed512_body(kg, x, 2, from, to, keys, r, s, share, box);
 }
 #endif
 
@@ -2033,51 +1994,75 @@ static void nbs__cs_keys_of(const nbs__cs *c, uint32_t *keys, int threads) {
  * y coordinates' (3 n / NBS__CS_WARM_SHARE words of n), each read before the gather writes
  * it. Returns false, having written nothing the caller needs, when more than n /
  * NBS__CS_WARM_SHARE keys changed. */
-static void nbs__cs_rekey_merge(const nbs__cs *c, const nbs__run *run, int64_t m,
-                                uint32_t *hist, int threads);
-static bool nbs__cs_rekey(const nbs__cs *c, const nbs__run *run, const nbs__cs_keying *kg,
-                          uint32_t *keys, uint32_t *hist, int threads, int64_t *moved) {
-  const int32_t n = c->n;
-  const int dim = c->dim;
+/* Step 1 of nbs__cs_rekey over all n elements, in `threads` parts, with keying kg: the
+ * changed elements' old words to R and new ones to S (each part its share of n /
+ * NBS__CS_WARM_SHARE, then closed up), their number returned, or -1 past that many, or
+ * NBS__CS_OUT (nbs__cs_changed); the coordinates' bounding box to lo, hi. */
+static int64_t nbs__cs_changes(const nbs__run *run, const nbs__cs_keying *kg, uint32_t *keys,
+                               uint64_t *R, int threads, double lo[3], double hi[3]) {
+  const int32_t n = run->n;
+  const int dim = run->dim;
   const int64_t limit = n / NBS__CS_WARM_SHARE, share = limit / threads;
+  uint64_t *S = R + limit;
   const double *x = run->x;
-  uint64_t *R = (uint64_t *)(void *)c->ys, *S = R + limit;
   int64_t out[NBS__THREADS_MAX] = {0}; /* zeroed for GCC 12 without OpenMP, as in nbs__cs_warm */
-  bool over = false;
-  /* 1 */
+  nbs__cs_box boxes[NBS__THREADS_MAX];
+  bool over = false, outside = false;
 #if defined(_OPENMP)
-#pragma omp parallel num_threads(threads) if (threads > 1) reduction(|| : over)
+#pragma omp parallel num_threads(threads) if (threads > 1) reduction(|| : over, outside)
 #endif
   NBS__PARTS(t, threads) {
     const int32_t from = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
-    const nbs__grid g = *kg->g;
+    const nbs__grid g = *kg->g; /* locals, in registers (see nbs__cs_core_split) */
     nbs__cs_keying kl = *kg;
     kl.g = &g;
+    nbs__cs_box *box = &boxes[t];
+    for (int a = 0; a < 3; a++) {
+      box->lo[a] = DBL_MAX;
+      box->hi[a] = -DBL_MAX;
+    }
     uint64_t *r = R + (size_t)t * (size_t)share, *s = S + (size_t)t * (size_t)share;
-    int64_t m = 0;
+    int64_t m;
     /* with AVX-512, 8 at a time: 3D steps of 1e-3 29.3-29.8 -> 29.1-29.4, 2D 15.6 -> 15.2 */
-    if (run->ctx->simd == NBS__SIMD_AVX512) {
 #if NBS__CS_AVX512
-      m = nbs__cs_changed512(&kl, x, from, to, keys, r, s, share);
+    if (run->ctx->simd == NBS__SIMD_AVX512) {
+      m = nbs__cs_changed512(&kl, x, from, to, keys, r, s, share, box);
+    } else
 #endif
-    } else {
-      m = nbs__cs_changed(&kl, x, dim, from, to, keys, r, s, 0, share);
+    {
+      m = nbs__cs_changed(&kl, x, dim, from, to, keys, r, s, 0, share, box);
     }
-    if (m < 0) {
-      over = true;
-      m = 0;
-    }
-    out[t] = m;
+    if (m == -1) over = true;
+    if (m == NBS__CS_OUT) outside = true;
+    out[t] = m < 0 ? 0 : m;
   }
-  *moved = 0;
-  if (over) return false;
+  if (outside) return NBS__CS_OUT;
+  if (over) return -1;
   int64_t m = out[0];
   for (int t = 1; t < threads; t++) {
     memmove(R + m, R + (size_t)t * (size_t)share, (size_t)out[t] * sizeof *R);
     memmove(S + m, S + (size_t)t * (size_t)share, (size_t)out[t] * sizeof *S);
     m += out[t];
   }
-  *moved = m;
+  for (int a = 0; a < 3; a++) {
+    lo[a] = a < dim ? boxes[0].lo[a] : 0.0;
+    hi[a] = a < dim ? boxes[0].hi[a] : 0.0;
+    for (int t = 1; t < threads && a < dim; t++) {
+      if (boxes[t].lo[a] < lo[a]) lo[a] = boxes[t].lo[a];
+      if (boxes[t].hi[a] > hi[a]) hi[a] = boxes[t].hi[a];
+    }
+  }
+  return m;
+}
+
+static void nbs__cs_rekey_merge(const nbs__cs *c, const nbs__run *run, int64_t m,
+                                uint32_t *hist, int threads);
+static bool nbs__cs_rekey(const nbs__cs *c, const nbs__run *run, const nbs__cs_keying *kg,
+                          uint32_t *keys, uint32_t *hist, int threads, int64_t *moved) {
+  double lo[3], hi[3]; /* the grid's box already (input.c's pass): not used */
+  const int64_t m = nbs__cs_changes(run, kg, keys, (uint64_t *)(void *)c->ys, threads, lo, hi);
+  *moved = m < 0 ? 0 : m;
+  if (m < 0) return false; /* past n / 16 (or, which this keying rules out, outside) */
   nbs__cs_rekey_merge(c, run, m, hist, threads);
   return true;
 }
@@ -2856,7 +2841,7 @@ static bool nbs__cs_kept_same(const nbs__cs_kept *kp, const nbs__cs_keying *kg) 
  * step 2. Where it does not, the keys are dropped (cs_keys) and the detection sorts from
  * scratch, as it would have once nbs__cs_rekey had found too many keys changed. The pass
  * stops at the first element outside the keying's box, or with a coordinate that is not
- * finite (nbs__cs_changed_box): the caller then runs input.c's pass, which names a bad
+ * finite (nbs__cs_changed): the caller then runs input.c's pass, which names a bad
  * number as it always does. Radii, where given, are read after it by input.c's pass of
  * them, whose largest the grid needs too (a bad one: input.c's passes then run again, to
  * name it as they always do).
@@ -2871,6 +2856,7 @@ bool nbs__cellsort_step(nbs__run *run, const nbs_input *in, nbs_algorithm asked)
   const int32_t n = run->n;
   const int dim = run->dim;
   run->stepped = false;
+  run->step_over = false;
   if (run->fresh || n < 2 || (asked != NBS_AUTO && asked != NBS_CELLSORT)) {
     return false;
   }
@@ -2885,71 +2871,23 @@ bool nbs__cellsort_step(nbs__run *run, const nbs_input *in, nbs_algorithm asked)
     return false;
   }
   char *w = nbs__cs_base(ctx->work);
-  uint32_t *keys = (uint32_t *)(void *)(w + at[0]);
-  const int64_t limit = n / NBS__CS_WARM_SHARE, share = limit / threads;
-  uint64_t *R = (uint64_t *)(void *)((double *)(void *)(w + at[1]) + stride), *S = R + limit;
   const nbs__cs_kept *kp = &ctx->cs_kept;
-  const double *x = run->x;
-  int64_t out[NBS__THREADS_MAX] = {0}; /* zeroed for GCC 12 without OpenMP */
-  nbs__cs_box boxes[NBS__THREADS_MAX];
-  bool over = false, outside = false;
-#if defined(_OPENMP)
-#pragma omp parallel num_threads(threads) if (threads > 1) reduction(|| : over, outside)
-#endif
-  NBS__PARTS(t, threads) {
-    const int32_t from = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
-    const nbs__grid g = kp->g; /* locals, in registers (see nbs__cs_core_split) */
-    nbs__cs_keying kl;
-    kl.g = &g;
-    kl.lo_x = kp->lo_x;
-    kl.inv_fine = kp->inv_fine;
-    for (int a = 0; a < 3; a++) kl.c[a] = kp->c[a];
-    kl.dim = dim;
-    kl.sy = kp->sy;
-    kl.sz = kp->sz;
-    nbs__cs_box *box = &boxes[t];
-    for (int a = 0; a < 3; a++) {
-      box->lo[a] = DBL_MAX;
-      box->hi[a] = -DBL_MAX;
-    }
-    uint64_t *r = R + (size_t)t * (size_t)share, *s = S + (size_t)t * (size_t)share;
-    int64_t m;
-#if NBS__CS_AVX512
-    if (ctx->simd == NBS__SIMD_AVX512) {
-      m = nbs__cs_changed512_box(&kl, x, from, to, keys, r, s, share, box);
-    } else
-#endif
-    {
-      m = nbs__cs_changed_box(&kl, x, dim, from, to, keys, r, s, 0, share, box);
-    }
-    if (m == -1) over = true;
-    if (m == NBS__CS_OUT) outside = true;
-    out[t] = m < 0 ? 0 : m;
-  }
-  if (over || outside) {
+  nbs__cs_keying kg;
+  kg.g = &kp->g;
+  kg.lo_x = kp->lo_x;
+  kg.inv_fine = kp->inv_fine;
+  for (int a = 0; a < 3; a++) kg.c[a] = kp->c[a];
+  kg.dim = dim;
+  kg.sy = kp->sy;
+  kg.sz = kp->sz;
+  double lo[3], hi[3];
+  const int64_t m = nbs__cs_changes(run, &kg, (uint32_t *)(void *)(w + at[0]),
+                                    (uint64_t *)(void *)((double *)(void *)(w + at[1]) + stride),
+                                    threads, lo, hi);
+  if (m < 0) {
     ctx->cs_keys = false; /* some were rewritten */
-    if (over) {
-      /* as nbs__cellsort counts a start that failed; it then takes one detection off the
-       * wait, this one, which sorts from scratch without trying again */
-      if (ctx->cs_warm_fails < 6) ctx->cs_warm_fails++;
-      ctx->cs_warm_wait = (1 << ctx->cs_warm_fails) + 1;
-    }
+    run->step_over = m == -1; /* nbs__cellsort counts it as a start that failed */
     return false;
-  }
-  int64_t m = out[0];
-  for (int t = 1; t < threads; t++) {
-    memmove(R + m, R + (size_t)t * (size_t)share, (size_t)out[t] * sizeof *R);
-    memmove(S + m, S + (size_t)t * (size_t)share, (size_t)out[t] * sizeof *S);
-    m += out[t];
-  }
-  double lo[3] = {0.0, 0.0, 0.0}, hi[3] = {0.0, 0.0, 0.0};
-  for (int a = 0; a < dim; a++) {
-    lo[a] = boxes[0].lo[a];
-    hi[a] = boxes[0].hi[a];
-    for (int t = 1; t < threads; t++) {
-      if (boxes[t].lo[a] < lo[a]) lo[a] = boxes[t].lo[a];
-      if (boxes[t].hi[a] > hi[a]) hi[a] = boxes[t].hi[a];
-    }
   }
   /* the radii, where given, by input.c's pass of them: their largest sizes the cells */
   double rmax = 0.5 * in->diameter;
@@ -3093,7 +3031,9 @@ nbs_status nbs__cellsort(nbs__run *run) {
     if (ctx->cs_warm_wait > 0) {
       ctx->cs_warm_wait--;
     } else {
-      if (eb == 32) {
+      if (run->step_over) {
+        /* nbs__cellsort_step found too many keys changed: the same start, tried already */
+      } else if (eb == 32) {
         uint32_t *ek = (uint32_t *)(void *)(w + at[0]);
         if (!keys) nbs__cs_keys_of(&c, ek, threads);
         warm = nbs__cs_rekey(&c, run, &kg, ek, hist, threads, &run->moved);

@@ -205,6 +205,9 @@ typedef struct nbs__run {
    * and new words of the step_moved elements whose key changed. */
   bool stepped;
   int64_t step_moved;
+  /* That pass found more keys changed than a start from the order takes (it then counts as
+   * the detection's failed start, and input.c's pass ran). */
+  bool step_over;
   bool reused_order;  /* cellsort started from the last cell order */
   int64_t moved;      /* the elements it sorted again */
 } nbs__run;
