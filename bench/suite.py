@@ -429,7 +429,9 @@ def describe_machine(a, started, load_start):
         mem = open("/proc/meminfo").readline().split(":", 1)[1].strip()
     except OSError:
         pass
-    cache = command_output(["sh", "-c", "lscpu | grep -i 'cache\\|MHz\\|Thread\\|Core\\|Socket'"])
+    # the family and model tell instances of one kind apart (a VM's model name may be bare)
+    cache = command_output(["sh", "-c", "lscpu | grep -i 'family\\|^Model:\\|Stepping\\|cache"
+                            "\\|MHz\\|Thread\\|Core\\|Socket'"])
     lines += [f"nproc: {os.cpu_count()}", f"cpu: {model}", f"cpu flags (subset): {flags}",
               f"memory: {mem}", f"kernel: {platform.release()}",
               f"load average at start: {load_start}",
