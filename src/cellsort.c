@@ -3071,6 +3071,7 @@ nbs_status nbs__cellsort(nbs__run *run) {
   }
 
   /* 4. sweep: thread t takes the elements [n t / T, n (t + 1) / T) of the cell order */
+  nbs__search_begins(run);
   nbs__sink sinks[NBS__THREADS_MAX];
   for (int t = 0; t < threads; t++) {
     memset(&sinks[t], 0, sizeof sinks[t]);

@@ -2,10 +2,14 @@
  * The context (memory, errors, the pair sink) and nbs_detect, which validates the input,
  * picks an algorithm from the table and runs it.
  */
+#if !defined(_POSIX_C_SOURCE)
+#define _POSIX_C_SOURCE 199309L /* clock_gettime */
+#endif
 #include "internal.h"
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <time.h>
 
 const char *nbs_version(void) { return NBS_VERSION_STRING; }
 
@@ -363,6 +367,16 @@ nbs_status nbs__room(nbs__run *run, size_t need, bool *room) {
 
 /* ---- detection ----------------------------------------------------------------------- */
 
+double nbs__now(void) {
+  struct timespec t;
+#if defined(CLOCK_MONOTONIC)
+  if (clock_gettime(CLOCK_MONOTONIC, &t) != 0) return 0.0;
+#else
+  if (timespec_get(&t, TIME_UTC) != TIME_UTC) return 0.0;
+#endif
+  return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
 nbs_detect_def nbs_default_detect_def(void) {
   nbs_detect_def def;
   memset(&def, 0, sizeof def);
@@ -386,6 +400,7 @@ nbs_status nbs_detect(nbs_context *ctx, const nbs_input *in, const nbs_detect_de
 }
 
 static nbs_status nbs__detect(nbs_context *ctx, const nbs_input *in, const nbs_detect_def *def) {
+  const double t_start = nbs__now();
   ctx->error[0] = '\0';
   ctx->error_element = -1;
   ctx->pairs_count = 0;
@@ -411,6 +426,7 @@ static nbs_status nbs__detect(nbs_context *ctx, const nbs_input *in, const nbs_d
   /* A time step of cellsort reads the input once, validating it and measuring its bounds
    * as it computes each element's key (nbs__cellsort_step); else input.c's pass. */
   if (!nbs__cellsort_step(&run, in, d.algorithm)) NBS__TRY(nbs__prepare_scan(&run, in));
+  const double t_input = nbs__now();
 
   nbs_algorithm algo = d.algorithm == NBS_AUTO ? nbs__choose(&run) : d.algorithm;
   run.ran = algo;
@@ -449,11 +465,18 @@ static nbs_status nbs__detect(nbs_context *ctx, const nbs_input *in, const nbs_d
   st->pair_bytes = ctx->pairs_cap * sizeof(nbs_pair);
   st->reused_order = run.reused_order;
   st->moved = run.moved;
+  st->seconds_input = t_input - t_start;
+  const double t_found = nbs__now();
+  if (run.t_search > 0.0) st->seconds_search = t_found - run.t_search;
+  st->seconds = t_found - t_start;
   if (s != NBS_OK) return s;
 
   ctx->pairs_count = run.callback ? 0 : run.count;
   ctx->pairs_valid = true;
-  if (d.sorted && !run.callback) nbs_sort_pairs(ctx->pairs, ctx->pairs_count);
+  if (d.sorted && !run.callback) {
+    nbs_sort_pairs(ctx->pairs, ctx->pairs_count);
+    st->seconds = nbs__now() - t_start;
+  }
   return NBS_OK;
 }
 

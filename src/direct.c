@@ -11,6 +11,7 @@ nbs_status nbs__direct(nbs__run *run) {
   run->compressed = false;
   run->cells[0] = run->cells[1] = run->cells[2] = 0;
   const int32_t n = run->n;
+  nbs__search_begins(run);
   for (int32_t i = 0; i < n; i++) {
     for (int32_t j = i + 1; j < n; j++) NBS__TRY(nbs__offer(run, i, j));
   }

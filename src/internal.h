@@ -210,7 +210,16 @@ typedef struct nbs__run {
   bool step_over;
   bool reused_order;  /* cellsort started from the last cell order */
   int64_t moved;      /* the elements it sorted again */
+  /* When the algorithm began its search, every element in place (nbs__search_begins; 0:
+   * not yet), for nbs_stats.seconds_search */
+  double t_search;
 } nbs__run;
+
+/* A monotonic clock in seconds (context.c), for the statistics' split of the time. */
+double nbs__now(void);
+/* Each algorithm calls this where its search begins: every element is in its cells, lists
+ * or order, and what follows tests candidates and hands out pairs. */
+static inline void nbs__search_begins(nbs__run *run) { run->t_search = nbs__now(); }
 
 /* ---- memory (context.c) ---- */
 void *nbs__alloc(nbs_context *ctx, size_t size);

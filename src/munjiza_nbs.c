@@ -960,6 +960,7 @@ nbs__nbs_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bool 
   }
   nbs__nbs_block K = {0};
   NBS__NBS_TRY(nbs__nbs_block_reserve(run, need, &K));
+  nbs__search_begins(run);
 
   /* Step 2: loop over the elements; the first one in a "new" z-list makes it the central
    * layer. The first elements of the layers, in the order of the elements, are those step 1

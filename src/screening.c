@@ -77,6 +77,7 @@ static nbs_status nbs__screen_detect(nbs__run *run, const nbs__screen_grid *sg, 
     E[k] = C[c];
     C[c] = k;
   }
+  nbs__search_begins(run);
 
   /* Step 2: the first element met in a cell makes it the central cell: mark the cell (the
    * book adds N to its head; we store -2 - head, see nbs__mark) and check it against itself

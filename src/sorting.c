@@ -348,5 +348,6 @@ nbs_status nbs__sorting(nbs__run *run) {
   nbs__sort_cells(&arrays, 0, count, 0);
 
   nbs__sort_view view = {D, cell[0], cell[1], dim == 3 ? cell[2] : NULL};
+  nbs__search_begins(run);
   return nbs__sort_search(run, &view);
 }

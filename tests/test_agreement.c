@@ -111,6 +111,14 @@ static void run_case(const case_def *c, int dim, nbs_context *ctx) {
     CHECK_MSG(algo == NBS_AUTO ? stats.algorithm != NBS_AUTO : stats.algorithm == algo,
               "%s %dD %s: stats name algorithm %d", c->label, dim, name, (int)stats.algorithm);
     CHECK_EQ(stats.pairs, got.count);
+    /* the time's split: input and search are parts of the whole, and every algorithm marks
+     * where its search begins (a search of two elements or more takes some time) */
+    CHECK_MSG(stats.seconds_input >= 0.0 && stats.seconds_search >= 0.0 &&
+                  stats.seconds_input + stats.seconds_search <= stats.seconds + 1e-9,
+              "%s %dD %s: seconds %g, input %g, search %g", c->label, dim, name, stats.seconds,
+              stats.seconds_input, stats.seconds_search);
+    CHECK_MSG(s.n < 2 || stats.seconds_search > 0.0, "%s %dD %s: no search time", c->label, dim,
+              name);
     CHECK_MSG(pair_lists_equal(&got, &ref), "%s %dD %s: %zu contacts, direct finds %zu",
               c->label, dim, name, got.count, ref.count);
 

@@ -251,6 +251,15 @@ typedef struct nbs_stats {
   size_t pair_bytes;   /* bytes of the pair buffer */
   int reused_order;    /* 1 if cellsort started from the last detection's cell order */
   int64_t moved;       /* then: elements that changed place in it and were sorted again */
+  /* Where the time went (wall clock, seconds; the split costs two clock reads). What is
+   * not in the input or the search is the algorithm's preparation: putting every element
+   * in its cells, lists or order (cellsort's keys, sort and gather; sorting's sort;
+   * screening's and nbs's first lists), and with def.sorted the pairs' sort. */
+  double seconds;        /* the whole detection, from the call to its return */
+  double seconds_input;  /* validating the input and measuring its bounds (in a cellsort
+                          * time step, the one pass that also computes the keys) */
+  double seconds_search; /* testing candidates and handing out pairs: from the moment the
+                          * algorithm has every element in place to its end */
 } nbs_stats;
 
 /* Statistics of the last detection (also after NBS_ERR_PAIRS: pairs then counts what was

@@ -21,7 +21,7 @@ foreach(a ${algorithms})
     continue()
   endif()
   foreach(key algorithm dim n pairs seconds ns_per_element bytes candidates cells compressed
-              work_bytes)
+              work_bytes input_seconds search_seconds)
     string(JSON v ERROR_VARIABLE jerr GET "${json}" ${key})
     if(jerr)
       fail("${a}: no key '${key}' in ${json}")
