@@ -251,7 +251,8 @@ typedef struct nbs_stats {
   size_t pair_bytes;   /* bytes of the pair buffer */
   int reused_order;    /* 1 if cellsort started from the last detection's cell order */
   int64_t moved;       /* then: elements that changed place in it and were sorted again */
-  /* Where the time went (wall clock, seconds; the split costs two clock reads). What is
+  /* Where the time went (wall clock, seconds; four reads of a monotonic clock per
+   * detection, about 0.1 microseconds on a current x86 Linux machine). What is
    * not in the input or the search is the algorithm's preparation: putting every element
    * in its cells, lists or order (cellsort's keys, sort and gather; sorting's sort;
    * screening's and nbs's first lists), and with def.sorted the pairs' sort. */
