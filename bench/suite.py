@@ -452,6 +452,36 @@ def describe_machine(a, started, load_start):
     return "\n".join(lines) + "\n"
 
 
+def earlier_runs(text):
+    """The runs a machine.txt (its text) records, oldest first, one line each (date, build,
+    command): its own run, after the earlier runs it lists.
+
+    >>> earlier_runs("date: D1\\ncommand: bench/run --fresh\\nnbs build: abc (the commit)\\n")
+    ['D1, build abc: bench/run --fresh']
+    >>> earlier_runs("date: D2\\ncommand: bench/run --n 1e8\\nnproc: 2\\nnbs build: def\\n"
+    ...              "earlier runs (rows):\\n  D1, build abc: bench/run --fresh\\n")
+    ['D1, build abc: bench/run --fresh', 'D2, build def: bench/run --n 1e8']
+    >>> earlier_runs("")
+    []
+    """
+    lines = text.splitlines()
+    own = {k: "" for k in ("date", "nbs build", "command")}
+    listed, in_list = [], False
+    for line in lines:
+        if line.startswith("earlier runs"):
+            in_list = True
+        elif in_list and line.startswith("  "):
+            listed.append(line.strip())
+        else:
+            in_list = False
+            key, _, value = line.partition(": ")
+            if key in own and not own[key]:
+                own[key] = value.split(" (")[0] if key == "nbs build" else value
+    if not own["command"]:
+        return listed
+    return listed + [f"{own['date']}, build {own['nbs build'] or '?'}: {own['command']}"]
+
+
 # ---- results: merge, summary, plots -------------------------------------------------------
 def key_of(r):
     return tuple(str(r[k]) for k in KEY)
@@ -920,11 +950,21 @@ def main(argv):
                                  float(r["spacing"] or 0), tool_rank(r["tool"])))
     write_rows(csv_path, rows)
     rows = load_rows(csv_path)
-    with open(os.path.join(a.out, "machine.txt"), "w") as f:
+    mpath = os.path.join(a.out, "machine.txt")
+    earlier = []
+    if not a.fresh and not a.smoke and os.path.exists(mpath):
+        with open(mpath) as f:
+            earlier = earlier_runs(f.read())
+    with open(mpath, "w") as f:
         f.write(describe_machine(a, started, load_start))
+        if earlier:
+            # a merge keeps the earlier runs' rows that this one did not replace
+            f.write("earlier runs (rows of results.csv this run did not replace):\n")
+            f.writelines(f"  {x}\n" for x in earlier)
     with open(os.path.join(a.out, "summary.md"), "w") as f:
-        f.write(f"Measured {started} on {os.path.basename(a.out)} "
-                f"(machine.txt); regenerate with bench/run.\n\n")
+        f.write(f"Measured {started} on {os.path.basename(a.out)} (machine.txt"
+                + ("; its earlier runs measured the rows this one did not" if earlier else "")
+                + "); regenerate with bench/run.\n\n")
         f.write(summary(rows, a.head_n))
     made = [] if a.no_plots else plots(rows, a.out)
     log(f"\nwrote {csv_path}, summary.md, machine.txt" +
