@@ -596,7 +596,9 @@ static size_t nbs__cs_block_generic(const nbs__cs *c, int32_t c0, int lanes,
  * without a branch by 16-wide stores: 34.8 / 34.8). Also: the pairs built only for the q
  * that hit (each step stores q and its mask; the hits are expanded after the ranges): the
  * same time (33.2 / 33.2), and the compress stored to memory directly: slower (35.1
- * against 33.4). Where the kernel's time goes, measured by leaving parts out (3D, N = 1e6,
+ * against 33.4); tried again on Zen 5 after the 32-byte store below, the pairs built only for
+ * the q that hit were slower (search 14.4-14.8 -> 15.0-15.3 ns per element, 3D N =
+ * 1e6). Where the kernel's time goes, measured by leaving parts out (3D, N = 1e6,
  * detection 34 ns): the steps over the ranges about 12 ns, of which the loops alone (one
  * load per q) about 5.5, the distances on top of them under 1, the pairs' output about 6.
  * Later (interleaved, min of 6, detection in ns per element, 3D N = 1e6 then 2D): leaving
@@ -1041,7 +1043,12 @@ static int32_t nbs__cs_lower(const uint64_t *key, int32_t hi, uint64_t k) {
  * base[r]; its window starts at q0[r] = q1[r] (q0[r] < 0: no such row). On the x axis the
  * key counts sub-cells of edge / fine (8 unless the key needs the bits), so these windows
  * hug the block. Every window only moves forwards, so finding them costs O(1) per block
- * and row; the kernel then tests one window element against the whole block at once. */
+ * and row; the kernel then tests one window element against the whole block at once.
+ * Finding the windows takes about a third of the sweep, and does not overlap the kernel
+ * (3D, N = 1e6, Zen 5: the sweep without the kernel 4.6 ns per element, with the kernel
+ * called twice 25.2, once 14.9). Tried and left out: each block's windows found one block
+ * ahead, before the kernel of the block before, so that the processor could run the two
+ * side by side: no faster (search 14.8-15.1 against 14.9-15.4, interleaved, min of 4). */
 static inline __attribute__((always_inline)) nbs_status
 nbs__cs_row_blocks(const nbs__cs *c, nbs__sink *s, int32_t row_a, int32_t a, int32_t b,
                    int rows, const uint64_t *base, int32_t *q0, int32_t *q1,
