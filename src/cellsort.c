@@ -692,8 +692,8 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, bool
    * (3D, N = 1e6: sweep 20.2 -> 19.4 ns per element; 2D 6.7 -> 6.6, where the kernel is
    * the smaller part of the sweep). In the order of the generic kernel. The 32-byte store
    * of the steps above was slower here (3D, N = 1e6, search 14.6 -> 15.4 ns per element,
-   * interleaved, min of 4): a rotation finds more pairs than a step, and more than 4 more
-   * often. */
+   * interleaved, min of 4), presumably because a rotation, among elements a few diameters
+   * apart, finds more than 4 pairs too often for the branch. */
   const __m512i iota = _mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0);
   const int own = rg->q1[last] > c0 ? NBS__CS_LANES / 2 : 0;
   for (int k = 1; k <= own; k++) {
