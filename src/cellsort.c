@@ -680,13 +680,14 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, bool
    * kernel is a smaller part; min of 3: 1e7 15.37 -> 14.92, time steps of 1e-3 at 1e6 20.62
    * -> 20.06 in all; the same bytes). 16 bytes unless more than 2 was slower (3D 1e6
    * search 15.1-15.8).
-   * The loop over each range ends in a mispredicted exit, five per block in 3D; a test
-   * program of these steps (a block against five ranges of 6-14 places each) took 7.5
-   * cycles a step, 6.0 with ranges of 8 places each and 5.4 with one range of 43. Tried and
-   * left out: the ranges' places first written to a list, sixteen at a time, and the steps
-   * one loop over it (one exit per block; 7.5 -> 6.9 cycles in that program), 3D N = 1e6
-   * search 14.9-15.1 -> 14.7-14.8 ns per element, but 1e4 10.8-10.9 -> 12.6-13.1 and 2D
-   * 1e6 5.6-5.7 -> 6.1-6.4 (interleaved, min of 5, one thread, three runs each). */
+   * The loop over each range ends in an exit the branch predictor can miss, five per block
+   * in 3D; a test program of these steps (a block against five ranges of 6-14 places each)
+   * took 7.5-7.8 cycles a step, 5.9-6.1 with ranges of 8 places each and 5.3-5.5 with one
+   * range of 43. Tried and left out: the ranges' places first written to a list, sixteen at
+   * a time, and the steps one loop over it (one exit per block; 6.8-7.1 cycles in that
+   * program), 3D N = 1e6 search 14.9-15.1 -> 14.7-14.8 ns per element, but 1e4 10.8-10.9
+   * -> 12.6-13.1 and 2D 1e6 5.6-5.7 -> 6.1-6.4 (interleaved, min of 5, one thread, three
+   * runs each). */
   const int last = rg->count - 1;
   for (int r = 0; r < rg->count; r++) {
     const int32_t q1 = r == last && rg->q1[r] > c0 ? c0 : rg->q1[r];
@@ -1991,7 +1992,7 @@ static void nbs__cs_gather(const nbs__cs *c, const nbs__run *run, const uint64_t
    * N = 1e7 26.43 -> 25.83, 1e6 23.95 -> 23.66; 2D 1e6 12.77 / 12.69). Tried and left out:
    * the coordinates put 8 at a time in a line of each array with a streaming store (the
    * line is then not read from memory before it is written): N = 1e6 the same (prepare 9.4-
-   * 9.5 against 9.6-9.8 ns per element, three runs), 1e7 0.1-0.7 less (10.0-10.6 against
+   * 9.5 against 9.6-9.8 ns per element, three runs), 1e7 0.2-0.6 less (10.0-10.6 against
    * 10.5-11.2, six runs), too little for a loop of its own per dimension, radii and thread
    * count. */
   double *restrict xs = c->xs, *restrict ys = c->ys, *restrict zs = c->zs;
