@@ -325,6 +325,7 @@ static int run_algorithm(nbs_algorithm alg, const scene *s, const options *o) {
   nbs_detect_def dfresh = ddef;
   dfresh.fresh = 1;
   if (st == NBS_OK && decoy) st = nbs_context_create(&cdef, &dctx);
+  nbs_context *failing = dctx; /* the context whose error a failure reports */
   double best = -1.0, spent = 0.0;
   /* the fastest of each part of the detection over the repeats (nbs_stats): the input's
    * check, the algorithm's preparation, the search */
@@ -338,6 +339,7 @@ static int run_algorithm(nbs_algorithm alg, const scene *s, const options *o) {
       st = nbs_detect(dctx, &din, &dfresh);
     }
     if (st != NBS_OK) break;
+    failing = ctx;
     double t0 = now_seconds();
     st = nbs_detect(ctx, &in, &ddef);
     double t = now_seconds() - t0;
@@ -362,9 +364,7 @@ static int run_algorithm(nbs_algorithm alg, const scene *s, const options *o) {
   }
   int failed = 0;
   if (st != NBS_OK) {
-    const char *why = !ctx ? nbs_status_message(st)
-                      : dctx && nbs_context_error(dctx)[0] ? nbs_context_error(dctx)
-                                                           : nbs_context_error(ctx);
+    const char *why = failing ? nbs_context_error(failing) : nbs_status_message(st);
     /* Spaces would break the key=value line: the reason goes to stderr. */
     fprintf(stderr, "nbs_bench: %s: %s\n", name, why);
     printf("tool=nbs-%s status=%s n=%lld dim=%d\n", name, nbs_status_name(st), (long long)s->n,
