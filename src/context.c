@@ -422,10 +422,13 @@ static nbs_status nbs__detect(nbs_context *ctx, const nbs_input *in, const nbs_d
   run.user = d.user;
   run.fresh = d.fresh != 0;
   ctx->cs_stepped = false;
+  ctx->cs_fresh_words = false;
   NBS__TRY(nbs__prepare_args(&run, in));
   /* A time step of cellsort reads the input once, validating it and measuring its bounds
    * as it computes each element's key (nbs__cellsort_step); else input.c's pass. */
-  if (!nbs__cellsort_step(&run, in, d.algorithm)) NBS__TRY(nbs__prepare_scan(&run, in));
+  if (!nbs__cellsort_step(&run, in, d.algorithm) && !nbs__cellsort_fresh(&run, in, d.algorithm)) {
+    NBS__TRY(nbs__prepare_scan(&run, in));
+  }
   const double t_input = nbs__now();
 
   nbs_algorithm algo = d.algorithm == NBS_AUTO ? nbs__choose(&run) : d.algorithm;

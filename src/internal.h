@@ -140,6 +140,9 @@ struct nbs_context {
    * took that pass (read by the tests). */
   nbs__cs_kept cs_kept;
   bool cs_kept_ok, cs_stepped;
+  /* Whether the last detection sorted from scratch with the keys of nbs__cellsort_fresh's
+   * pass (its guessed keying was this detection's; read by the tests). */
+  bool cs_fresh_words;
   /* How the last cellsort detection sorted its keys: -1 by the whole key (and before any),
    * else by its crowded core, this many elements (the outliers) apart (nbs__cs_core). Read
    * by the tests, which cannot see it through the API. */
@@ -208,6 +211,12 @@ typedef struct nbs__run {
   /* That pass found more keys changed than a start from the order takes (it then counts as
    * the detection's failed start, and input.c's pass ran). */
   bool step_over;
+  /* The input was read by cellsort's pass for a detection from scratch
+   * (nbs__cellsort_fresh): the grid comes from the bounds it measured, and the work block
+   * holds step 1's words made with the keying `pre`, of pre_bits bits. */
+  bool prewords;
+  nbs__cs_kept pre;
+  int pre_bits;
   bool reused_order;  /* cellsort started from the last cell order */
   int64_t moved;      /* the elements it sorted again */
   /* When the algorithm began its search, every element in place (nbs__search_begins; 0:
@@ -390,6 +399,11 @@ nbs_status nbs__cellsort(nbs__run *run);
  * whether it took it (run->stepped, run->grid set). Else nothing was read, or what was is
  * discarded, and the caller runs nbs__prepare_scan. run: as nbs__prepare_args left it. */
 bool nbs__cellsort_step(nbs__run *run, const nbs_input *in, nbs_algorithm asked);
+/* A detection from scratch's pass over the input (see cellsort.c), in place of
+ * nbs__prepare_scan where the context holds a free work block for cellsort and `asked` may
+ * run it; returns whether it took it (run->prewords, run->grid set). Else the caller runs
+ * nbs__prepare_scan. run: as nbs__prepare_args left it. */
+bool nbs__cellsort_fresh(nbs__run *run, const nbs_input *in, nbs_algorithm asked);
 /* True when cellsort's 64-bit cell key can index the grid (auto's test). */
 bool nbs__cellsort_fits(const nbs__grid *g);
 /* Bytes of cellsort's work block for n elements (with radii or not) and `threads` threads:

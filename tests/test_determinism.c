@@ -936,6 +936,169 @@ static void test_step_pass(void) {
   }
 }
 
+/* A detection from scratch in a context that holds cellsort's work arrays reads the input
+ * once: cellsort computes every element's key with a keying guessed from a sample while it
+ * validates the input and measures its box (nbs__cellsort_fresh), and the keys stand only
+ * if the detection's own keying is the guess. Every such detection must give the bytes of
+ * a first detection in a new context (which has no arrays: input.c's pass, then the keys),
+ * or its error (status, element, message):
+ *  - the scene as it is (the guess holds: ctx->cs_fresh_words);
+ *  - a coordinate that is not finite, on an element of the sample and on others, on each
+ *    axis, at the start, in the middle (the AVX-512 pass takes 8 at a time) and at the end;
+ *  - an element a little below the others (the lattice point below the lowest coordinate
+ *    may change: the guess fails, the keys are computed again), far below and far above
+ *    (the pass stops: input.c's pass runs), and one of the sample far below (the guess
+ *    holds);
+ *  - a bad radius; a scene of two clusters with outliers at 1e12 (keys of more than 31
+ *    bits: no guess);
+ * with auto and cellsort, the default kernel and the generic one, one thread and two. */
+typedef struct fp_ctx {
+  nbs_context_def cdef;
+  int kernel; /* 1: NBS_SIMD=generic */
+} fp_ctx;
+
+static void fp_create(const fp_ctx *f, nbs_context **ctx) {
+  if (f->kernel) ASSERT_TRUE(setenv("NBS_SIMD", "generic", 1) == 0);
+  nbs_status cs = nbs_context_create(&f->cdef, ctx);
+  unsetenv("NBS_SIMD");
+  ASSERT_OK(cs);
+}
+
+/* ctx detects s from scratch, and so does a new context; the same bytes or the same error.
+ * words >= 0: whether ctx must have taken the guessed keys. */
+static void fp_check(const fp_ctx *f, nbs_context *ctx, const scene *s, nbs_algorithm algo,
+                     int words, const char *what) {
+  nbs_context *ref;
+  fp_create(f, &ref);
+  nbs_input in = scene_input(s);
+  nbs_detect_def def = nbs_default_detect_def();
+  def.algorithm = algo;
+  def.fresh = 1;
+  const nbs_status got = nbs_detect(ctx, &in, &def);
+  const bool took = ctx->cs_fresh_words;
+  pair_list a = {0}, b = {0};
+  if (got == NBS_OK) {
+    const nbs_pair *p = nbs_pairs(ctx, &a.count);
+    a.p = malloc((a.count ? a.count : 1) * sizeof *a.p);
+    if (!a.p) abort();
+    if (a.count) memcpy(a.p, p, a.count * sizeof *p);
+  }
+  const nbs_status want = nbs_detect(ref, &in, &def);
+  CHECK_MSG(!ref->cs_fresh_words, "%s: a new context took guessed keys", what);
+  CHECK_MSG(got == want, "%s: %s, a new context %s", what, nbs_status_name(got),
+            nbs_status_name(want));
+  if (got == want && got == NBS_OK) {
+    const nbs_pair *p = nbs_pairs(ref, &b.count);
+    b.p = malloc((b.count ? b.count : 1) * sizeof *b.p);
+    if (!b.p) abort();
+    if (b.count) memcpy(b.p, p, b.count * sizeof *p);
+    CHECK_MSG(same_bytes(&a, &b), "%s: %zu pairs, a new context %zu", what, a.count, b.count);
+  } else if (got == want) {
+    CHECK_MSG(nbs_context_error_element(ctx) == nbs_context_error_element(ref) &&
+                  strcmp(nbs_context_error(ctx), nbs_context_error(ref)) == 0,
+              "%s: element %lld (%s), a new context %lld (%s)", what,
+              (long long)nbs_context_error_element(ctx), nbs_context_error(ctx),
+              (long long)nbs_context_error_element(ref), nbs_context_error(ref));
+  }
+  if (words >= 0) CHECK_MSG((int)took == words, "%s: guessed keys %d", what, (int)took);
+  free(a.p);
+  free(b.p);
+  nbs_context_destroy(ref);
+}
+
+static void test_fresh_pass(void) {
+  long took = 0;
+  for (int dim = 2; dim <= 3; dim++) {
+    for (int kr = 0; kr < 4; kr++) {
+      for (int threads = 1; threads <= 2; threads++) {
+        fp_ctx f;
+        f.cdef = nbs_default_context_def();
+        f.cdef.threads = threads;
+        f.kernel = kr % 2;
+        const int radii = kr / 2;
+        const nbs_algorithm algo = threads == 1 ? NBS_AUTO : NBS_CELLSORT;
+        nbs_context *ctx;
+        fp_create(&f, &ctx);
+        /* 45,003 elements: two threads' parts, and 3 past the last 8 */
+        const int64_t n = 45003;
+        const double box = (dim == 2 ? 140.0 : 26.0) * pow((double)n / 20000.0, 1.0 / dim);
+        scene s = det_scene(radii ? DET_RADII : DET_UNIFORM, dim, n, box, 1.18, 70 + dim);
+        /* element 0, in every sample, at the lowest corner: the guess's lattice point is
+         * the box's (a random sample's lowest element lies a few hundredths of a cell above
+         * the lowest one, and now and then on the other side of a lattice point) */
+        for (int a = 0; a < dim; a++) s.coords[a] = 1.18;
+        char what[200];
+#define FPCHECK(label, words)                                                                 \
+  do {                                                                                        \
+    snprintf(what, sizeof what, "%dD, kernel %d, radii %d, %d threads: %s", dim, f.kernel,    \
+             radii, threads, label);                                                          \
+    fp_check(&f, ctx, &s, algo, words, what);                                                 \
+    took += ctx->cs_fresh_words;                                                              \
+  } while (0)
+        FPCHECK("first (no arrays yet)", 0);
+        FPCHECK("second", 1);
+        /* not finite: elements 0 and n - 8 are in every sample, 1, n / 2 + 3 and n - 2 in
+         * none of these scenes' */
+        const int64_t at[] = {0, 1, n / 2 + 3, n - 8, n - 2};
+        const double bad[] = {NAN, INFINITY, -INFINITY};
+        for (size_t b = 0; b < sizeof at / sizeof *at && !test_failures; b++) {
+          for (int a = 0; a < dim && !test_failures; a++) {
+            double *v = &s.coords[at[b] * dim + a];
+            const double keep = *v;
+            *v = bad[(b + (size_t)a) % 3];
+            char label[64];
+            snprintf(label, sizeof label, "element %lld axis %d not finite", (long long)at[b], a);
+            FPCHECK(label, 0);
+            *v = keep;
+          }
+        }
+        FPCHECK("all finite again", 1);
+        /* below and above the others, on each axis in turn */
+        const double shifts[] = {-0.3, -0.9, -40.0, 3.0 * box, 1e9};
+        for (size_t k = 0; k < sizeof shifts / sizeof *shifts && !test_failures; k++) {
+          for (int a = 0; a < dim && !test_failures; a++) {
+            const int64_t e = 5 + 2 * a; /* in no sample */
+            double *v = &s.coords[e * dim + a];
+            const double keep = *v;
+            *v = 1.18 + shifts[k];
+            char label[64];
+            snprintf(label, sizeof label, "element %lld at %g on axis %d", (long long)e, *v, a);
+            FPCHECK(label, -1);
+            *v = keep;
+          }
+        }
+        /* one of the sample far below: in the guess */
+        const double keep0 = s.coords[0];
+        s.coords[0] = 1.18 - 40.0;
+        FPCHECK("element 0 far below", 1);
+        s.coords[0] = keep0;
+        if (radii) {
+          for (size_t b = 0; b < 3 && !test_failures; b++) {
+            double *v = &s.radii[at[b + 1]];
+            const double keep = *v;
+            *v = b == 0 ? 0.0 : b == 1 ? -0.25 : NAN;
+            FPCHECK("a bad radius", 0);
+            *v = keep;
+          }
+        }
+        FPCHECK("as at first", 1);
+#undef FPCHECK
+        scene_free(&s);
+        /* two clusters and outliers at 1e12 (auto: another algorithm, or keys too wide for
+         * a guess) */
+        scene c = det_scene(DET_CLUSTERS, dim, n, box, 1.18, 80 + dim);
+        snprintf(what, sizeof what, "%dD, kernel %d, %d threads: clusters", dim, f.kernel,
+                 threads);
+        fp_check(&f, ctx, &c, algo, 0, what);
+        fp_check(&f, ctx, &c, algo, 0, what);
+        scene_free(&c);
+        nbs_context_destroy(ctx);
+      }
+    }
+  }
+  CHECK_MSG(took > 0, "no detection took the guessed keys");
+}
+
 /* Kernels: cellsort's generic kernel (asked for with NBS_SIMD=generic, read when a context
  * is created) gives the same bytes in the same order as the one the processor gets by
  * default and as the AVX2 one (NBS_SIMD=avx2), on every case and both modes. Where the
@@ -1181,6 +1344,7 @@ int main(int argc, char **argv) {
       {"kernels", test_kernels},
       {"time_steps", test_time_steps},
       {"step_pass", test_step_pass},
+      {"fresh_pass", test_fresh_pass},
       {"golden_hashes", test_golden_hashes},
       {"axis_order", test_axis_order},
   };

@@ -258,7 +258,9 @@ typedef struct nbs_stats {
    * screening's and nbs's first lists), and with def.sorted the pairs' sort. */
   double seconds;        /* the whole detection, from the call to its return */
   double seconds_input;  /* validating the input and measuring its bounds (in a cellsort
-                          * time step, the one pass that also computes the keys) */
+                          * time step, and in a cellsort detection from scratch once the
+                          * context holds its work arrays, the one pass that also computes
+                          * the keys) */
   double seconds_search; /* testing candidates and handing out pairs: from the moment the
                           * algorithm has every element in place to its end */
 } nbs_stats;
