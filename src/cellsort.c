@@ -702,7 +702,14 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, bool
    * a time, and the steps one loop over it (one exit per block; 6.8-7.1 cycles in that
    * program), 3D N = 1e6 search 14.9-15.1 -> 14.7-14.8 ns per element, but 1e4 10.8-10.9
    * -> 12.6-13.1 and 2D 1e6 5.6-5.7 -> 6.1-6.4 (interleaved, min of 5, one thread, three
-   * runs each). */
+   * runs each). Also tried and left out: half blocks. Lanes 0-3 and 4-7 each span about 3
+   * diameters in x, and of a neighbouring row's window (about 9 places) a q within one edge
+   * of one half only is about 4 places either side; so each window was split by two
+   * vector counts of its keys, and a step tested one q against lanes 0-3 and another
+   * against lanes 4-7 (the q broadcast to each half and the halves joined by an insert),
+   * the longer side's rest one q a step: 3D N = 1e6 search 15.7-15.9 -> 23.5-24.1 ns per
+   * element (a first version, which also found some pairs twice): three loops per window
+   * where there was one, and four more instructions a step. */
   const int last = rg->count - 1;
   for (int r = 0; r < rg->count; r++) {
     const int32_t q1 = r == last && rg->q1[r] > c0 ? c0 : rg->q1[r];
