@@ -3211,7 +3211,8 @@ bool nbs__cellsort_fresh(nbs__run *run, const nbs_input *in, nbs_algorithm asked
   /* the guess: the grid of the sample's box */
   double lo[3] = {0.0, 0.0, 0.0}, hi[3] = {0.0, 0.0, 0.0};
   nbs__run guess = *run;
-  for (int64_t s = NBS__CS_FRESH_SAMPLE, more = s;;) {
+  nbs__cs_plan plan;
+  for (int64_t s = NBS__CS_FRESH_SAMPLE, first = 1;; first = 0) {
     for (int a = 0; a < dim; a++) {
       lo[a] = DBL_MAX;
       hi[a] = -DBL_MAX;
@@ -3225,21 +3226,22 @@ bool nbs__cellsort_fresh(nbs__run *run, const nbs_input *in, nbs_algorithm asked
       }
     }
     nbs__grid_measured(&guess, lo, hi, rmax);
-    if (more > s || !guess.grid.fits) break;
+    int why;
+    if (!nbs__cs_plan_of(&guess.grid, dim, n, &plan, &why) || !plan.packed || plan.eb != 32) {
+      return false; /* keys too wide for this pass: input.c's pass and step 1 as they were */
+    }
     /* s elements spread evenly over an axis of C cells leave about C / s cells between
      * the lowest of them and the lowest element: a sample of 16 C, so that the two share a
-     * lattice point more than 9 times in 10 (2D, N = 1e6: 1,253 cells, a sample of 20,048) */
+     * lattice point more than 9 times in 10 (2D, N = 1e6: 1,253 cells, a sample of 20,048),
+     * but of at most N / 16, a part of the pass it is to save */
+    if (!first) break; /* enlarged once */
+    int64_t more = s;
     for (int a = 0; a < dim; a++) {
       if (16 * guess.grid.n[a] > more) more = 16 * guess.grid.n[a];
     }
-    if (more > n / 4) more = n / 4;
+    if (more > n / 16) more = n / 16;
     if (more <= s) break;
     s = more;
-  }
-  nbs__cs_plan plan;
-  int why;
-  if (!nbs__cs_plan_of(&guess.grid, dim, n, &plan, &why) || !plan.packed || plan.eb != 32) {
-    return false;
   }
   const nbs__cs_keying kg = nbs__cs_keying_of(&plan, dim);
 
