@@ -3177,16 +3177,24 @@ static nbs__cs_keying nbs__cs_keying_of(const nbs__cs_plan *p, int dim) {
  * pairs, their order and the errors are those of input.c's pass and step 1.
  * Taken only where the context holds a work block large enough and free of another
  * algorithm's state (a first detection has none: nothing is allocated before the grid is
- * known), where the detection sorts from scratch (def.fresh, or no order of this n: the
- * words overwrite the order), and where the guess's keys are packed with eb = 32 and the
- * input is below the partition's size (the paths of nbs__cs_sort_gather that begin with
- * step 1 as it is).
+ * known), where the detection sorts from scratch (def.fresh, no order of this n, or one it
+ * would not start from: the starts paused after failing, or the time-step pass having found
+ * too many elements moved; the words overwrite the order), and where the guess's keys are
+ * packed with eb = 32 and the input is below the partition's size (the paths of
+ * nbs__cs_sort_gather that begin with step 1 as it is).
+ * Where the guess fails, the pass costs about what input.c's does, plus the words it wrote
+ * for nothing; that happens most where the elements thin out towards the domain's edges, so
+ * that the sample's lowest element lies cells above the lowest (a uniform scene whose
+ * elements each step moved up to D / 2 at random: the sample's guess failed at every step).
  * Measured (one thread, random order, fraction 0.5, interleaved with the build before,
  * median of 4-12 processes each the minimum of 5 detections, ns per element, the same
  * hashes): 3D N = 1e6 24.79 -> 23.27 and 25.91 -> 25.20 (two runs; the sort after it took
  * 1.4-1.7 less, more than the keys' pass: the input is read once, while it is in the
  * caches), 1e7 26.56 -> 25.33, 1e4 (with 4 decoys) 18.70 -> 18.63; 2D 1e6 14.46 -> 14.09;
- * time steps (which do not take it) the same. The sample: 1,024 elements, or 16 per cell
+ * time steps (which do not take it) the same; one context detecting three unrelated scenes
+ * of 1e6 elements in turn, without def.fresh (the starts from the order fail and pause),
+ * 26.8-27.8 -> 26.0-26.2 (medians of 30 detections, three processes each). The sample:
+ * 1,024 elements, or 16 per cell
  * of the longest axis where that is more (a quarter of N at most); 2D N = 1e6 took the
  * guessed keys only with it (1,253 cells per axis). */
 bool nbs__cellsort_fresh(nbs__run *run, const nbs_input *in, nbs_algorithm asked) {
@@ -3196,7 +3204,12 @@ bool nbs__cellsort_fresh(nbs__run *run, const nbs_input *in, nbs_algorithm asked
   run->prewords = false;
   if (n < NBS__CS_FRESH_MIN || (asked != NBS_AUTO && asked != NBS_CELLSORT)) return false;
   if (ctx->work_kind != NBS__WORK_CELLSORT && ctx->work_kind != NBS__WORK_NONE) return false;
-  if (!run->fresh && ctx->work_kind == NBS__WORK_CELLSORT && ctx->cs_order_n == n) return false;
+  /* The block holds the last detection's order of this n: taken only where this detection
+   * would not start from it either, its starts being paused (cs_warm_wait) or the time-step
+   * pass having found too many elements moved (step_over); nbs__cellsort then counts the
+   * pause, or the failed start, as it would have (run->order_dropped). */
+  const bool order = ctx->work_kind == NBS__WORK_CELLSORT && ctx->cs_order_n == n;
+  if (order && !run->fresh && !run->step_over && ctx->cs_warm_wait == 0) return false;
   const int threads = nbs__cs_threads(run);
   size_t at[4], stride;
   if (nbs__cs_layout(dim, n, run->r != NULL, threads, at, &stride) > ctx->work_size) {
@@ -3247,6 +3260,8 @@ bool nbs__cellsort_fresh(nbs__run *run, const nbs_input *in, nbs_algorithm asked
 
   /* step 1 where nbs__cs_sort_gather puts it: in the coordinates' array with an odd number
    * of passes; the order the block held is gone */
+  run->order_dropped = order && !run->fresh;
+  run->dropped_eb = ctx->cs_order_eb;
   ctx->cs_order_n = 0;
   ctx->cs_kept_ok = false;
   ctx->cs_keys = false;
@@ -3334,8 +3349,9 @@ nbs_status nbs__cellsort(nbs__run *run) {
   const size_t bytes = nbs__cs_layout(dim, n, run->r != NULL, threads, at, &stride);
   NBS__TRY(nbs__work_reserve(ctx, bytes));
   /* the last detection's cell order, when it is there (a new block holds none) */
-  const bool had_order = ctx->work_kind == NBS__WORK_CELLSORT && ctx->cs_order_n == n &&
-                         ctx->cs_order_eb == eb;
+  const bool had_order = (ctx->work_kind == NBS__WORK_CELLSORT && ctx->cs_order_n == n &&
+                          ctx->cs_order_eb == eb) ||
+                         (run->order_dropped && run->dropped_eb == eb);
   ctx->work_kind = NBS__WORK_CELLSORT;
   ctx->cs_order_n = 0; /* no order until this detection's is complete */
   ctx->cs_kept_ok = false;

@@ -217,6 +217,12 @@ typedef struct nbs__run {
   bool prewords;
   nbs__cs_kept pre;
   int pre_bits;
+  /* That pass overwrote the last detection's order of this n, which this detection would
+   * not have started from (its starts paused, or too many elements moved), whose words had
+   * dropped_eb element bits: nbs__cellsort counts the pause or the failed start all the
+   * same. */
+  bool order_dropped;
+  int dropped_eb;
   bool reused_order;  /* cellsort started from the last cell order */
   int64_t moved;      /* the elements it sorted again */
   /* When the algorithm began its search, every element in place (nbs__search_begins; 0:

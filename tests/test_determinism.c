@@ -1006,6 +1006,12 @@ static void fp_check(const fp_ctx *f, nbs_context *ctx, const scene *s, nbs_algo
   nbs_context_destroy(ref);
 }
 
+/* Whether ctx's last detection started from the order before it. */
+static int st_reused(nbs_context *ctx) {
+  nbs_stats st;
+  return nbs_last_stats(ctx, &st) == NBS_OK ? st.reused_order : -1;
+}
+
 static void test_fresh_pass(void) {
   long took = 0;
   for (int dim = 2; dim <= 3; dim++) {
@@ -1083,6 +1089,57 @@ static void test_fresh_pass(void) {
         }
         FPCHECK("as at first", 1);
 #undef FPCHECK
+        /* time steps that move every element far (another scene of the same n, with element
+         * 0 at the lowest corner again): the time-step pass finds too many keys changed,
+         * the starts from the order pause for 2 detections, then 4 (cs_warm_wait); the
+         * detections that do not start from the order take this pass, and count the failed
+         * start or the pause as before */
+        if (threads == 1 && !test_failures) {
+          nbs_detect_def step = nbs_default_detect_def();
+          step.algorithm = algo;
+          scene t = det_scene(radii ? DET_RADII : DET_UNIFORM, dim, n, box, 1.18, 90 + dim);
+          for (int a = 0; a < dim; a++) t.coords[a] = 1.18;
+          const nbs_input in = scene_input(&s), tin = scene_input(&t);
+          ASSERT_OK(nbs_detect(ctx, &in, &step));
+          ASSERT_OK(nbs_detect(ctx, &in, &step)); /* the second writes the keys */
+          const int fails = ctx->cs_warm_fails;
+          /* the expected waits: 2 after the failed start, counted down by the pauses, then
+           * the order's start tried again on the same scene, which succeeds */
+          const int waits[] = {2, 1, 0};
+          for (int k = 0; k < 4 && !test_failures; k++) {
+            const nbs_input *which = &tin;
+            ASSERT_OK(nbs_detect(ctx, which, &step));
+            snprintf(what, sizeof what, "%dD, kernel %d, radii %d: far step %d", dim, f.kernel,
+                     radii, k);
+            if (k < 3) {
+              CHECK_MSG(ctx->cs_fresh_words && !ctx->cs_stepped && ctx->cs_warm_wait == waits[k] &&
+                            ctx->cs_warm_fails == fails + 1,
+                        "%s: guessed keys %d, stepped %d, wait %d, fails %d (before %d)", what,
+                        (int)ctx->cs_fresh_words, (int)ctx->cs_stepped, ctx->cs_warm_wait,
+                        ctx->cs_warm_fails, fails);
+            } else {
+              CHECK_MSG(!ctx->cs_fresh_words && ctx->cs_warm_wait == 0 && st_reused(ctx),
+                        "%s: guessed keys %d, wait %d, reused %d", what,
+                        (int)ctx->cs_fresh_words, ctx->cs_warm_wait, st_reused(ctx));
+            }
+            /* the same bytes as a new context */
+            pair_list a = {0}, b = {0};
+            const nbs_pair *p = nbs_pairs(ctx, &a.count);
+            a.p = malloc((a.count ? a.count : 1) * sizeof *a.p);
+            if (!a.p) abort();
+            if (a.count) memcpy(a.p, p, a.count * sizeof *p);
+            nbs_context *ref;
+            fp_create(&f, &ref);
+            ASSERT_OK(nbs_detect(ref, which, &step));
+            p = nbs_pairs(ref, &b.count);
+            CHECK_MSG(a.count == b.count && (a.count == 0 || memcmp(a.p, p, a.count * sizeof *p) == 0),
+                      "%s: %zu pairs, a new context %zu", what, a.count, b.count);
+            lists_compared++;
+            free(a.p);
+            nbs_context_destroy(ref);
+          }
+          scene_free(&t);
+        }
         scene_free(&s);
         /* two clusters and outliers at 1e12 (auto: another algorithm, or keys too wide for
          * a guess) */
