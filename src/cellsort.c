@@ -1170,6 +1170,8 @@ nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
   const int64_t ny = c->ny;
   static const int row_dy[4] = {-1, 0, 1, -1}, row_dz[4] = {-1, -1, -1, 0};
   int32_t cur[4] = {-1, -1, -1, -1};
+  /* where the last row's window in the row below it (dy = +1, dz = -1) ended (-1: none) */
+  int32_t lq1 = -1;
   int32_t a = from, prev_a = -1;
   uint64_t prev_row = 0;
   while (a < to && st == NBS_OK) {
@@ -1187,6 +1189,19 @@ nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
     /* the neighbouring rows: their first element (or -1: empty or outside) */
     uint64_t base[4];
     int32_t q0[4], q1[4];
+    /* Row y, right after row y - 1 in its layer: its cursors at rows y - 1 and y of the
+     * layer below are those row y - 1 had there, and the one at y + 1 starts where row
+     * y - 1's window in row y ended, a few places before it. Each cursor moved from its
+     * own place went over a whole row of the layer below for every row swept, sixteen keys
+     * a step, each step waiting for the one before (3D, N = 1e6: search 15.4 -> 14.6 ns
+     * per element). Tried first: each cursor from the furthest of the places known to lie
+     * before its row, chosen for every row: the huge domain's search, whose rows seldom
+     * follow one another, 16.1 -> 26.7. */
+    if (prev_a >= 0 && row == prev_row + 1 && row >> by == prev_row >> by) {
+      cur[0] = cur[1];
+      cur[1] = cur[2];
+      if (lq1 > cur[2]) cur[2] = lq1;
+    }
     for (int r = 0; r < 4; r++) {
       q0[r] = -1;
       const int64_t y = iy + row_dy[r], z = iz + row_dz[r];
@@ -1210,6 +1225,7 @@ nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
       if (key[q] >> kx == trow) q0[r] = q1[r] = q;
     }
     st = nbs__cs_row_blocks(c, s, a0, a, b, 4, base, q0, q1, below, upto);
+    lq1 = q0[2] >= 0 ? q1[2] : -1;
     prev_row = row;
     prev_a = a0;
     a = b;
