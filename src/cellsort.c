@@ -161,11 +161,14 @@
 #define NBS__CS_AVX512 0
 #endif
 
-/* The sweep and its kernels start on a cache line, so that their loops lie in the
- * instruction fetch's windows the same way whatever code comes before them in the file.
- * Without it, an unrelated function added above moved both by 32 bytes and the search
- * took 0.2-0.3 ns per element more (3D, N = 1e6, interleaved, median of 8: time steps of
- * 1e-3 14.71 -> 14.91 ns, from scratch 14.43 -> 14.71). */
+/* The AVX-512 sweep starts on a cache line, so that its loops lie in the instruction
+ * fetch's windows the same way whatever code comes before it in the file. Code placement
+ * moves the search by up to a nanosecond per element here, and not the same way for every
+ * scene: an unrelated function added above moved the sweep and the kernel by 32 bytes, and
+ * the search took 0.2-0.3 ns per element more (3D, N = 1e6, interleaved, median of 8: time
+ * steps of 1e-3 14.71 -> 14.91 ns, from scratch 14.43 -> 14.71); both aligned, later, the
+ * uniform scene's search was 0.2 ns faster than with the sweep alone aligned, but the sparse
+ * scene's (fraction 0.005) 1.2 slower (19.4 -> 20.6), so the kernel is not. */
 #if defined(__GNUC__)
 #define NBS__CS_HOT __attribute__((aligned(64)))
 #else
@@ -755,7 +758,7 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, bool
   return m;
 }
 
-NBS__CS_AVX512_TARGET NBS__CS_HOT
+NBS__CS_AVX512_TARGET
 static size_t nbs__cs_block_avx512(const nbs__cs *c, int32_t c0, int lanes,
                                    const nbs__cs_ranges *rg, nbs_pair *out) {
   /* whole: q's number is the whole int32 it reads (imask all ones), no AND */
@@ -1208,11 +1211,14 @@ nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
      * a step, each step waiting for the one before (3D, N = 1e6: search 15.4 -> 14.6 ns
      * per element). Tried first: each cursor from the furthest of the places known to lie
      * before its row, chosen for every row: the huge domain's search, whose rows seldom
-     * follow one another, 16.1 -> 26.7. */
-    if (prev_a >= 0 && row == prev_row + 1 && row >> by == prev_row >> by) {
-      cur[0] = cur[1];
-      cur[1] = cur[2];
-      if (lq1 > cur[2]) cur[2] = lq1;
+     * follow one another, 16.1 -> 26.7. Selected without a branch (with one, the sparse
+     * scene's search took 0.4 ns more). */
+    {
+      const bool next = (prev_a >= 0) & (row == prev_row + 1) & (row >> by == prev_row >> by);
+      const int32_t c1 = cur[1], c2 = cur[2], l2 = lq1 > c2 ? lq1 : c2;
+      cur[0] = next ? c1 : cur[0];
+      cur[1] = next ? c2 : c1;
+      cur[2] = next ? l2 : c2;
     }
     for (int r = 0; r < 4; r++) {
       q0[r] = -1;
