@@ -1575,6 +1575,27 @@ typedef struct nbs__cs_box {
   double lo[3], hi[3];
 } nbs__cs_box;
 
+/* A box that holds nothing yet. */
+static void nbs__cs_box_clear(nbs__cs_box *box) {
+  for (int a = 0; a < 3; a++) {
+    box->lo[a] = DBL_MAX;
+    box->hi[a] = -DBL_MAX;
+  }
+}
+
+/* The box of the threads' boxes, to lo and hi (0 past dim). */
+static void nbs__cs_boxes_join(const nbs__cs_box *boxes, int threads, int dim, double lo[3],
+                               double hi[3]) {
+  for (int a = 0; a < 3; a++) {
+    lo[a] = a < dim ? boxes[0].lo[a] : 0.0;
+    hi[a] = a < dim ? boxes[0].hi[a] : 0.0;
+    for (int t = 1; t < threads && a < dim; t++) {
+      if (boxes[t].lo[a] < lo[a]) lo[a] = boxes[t].lo[a];
+      if (boxes[t].hi[a] > hi[a]) hi[a] = boxes[t].hi[a];
+    }
+  }
+}
+
 /* The keying's box: how far each of the key's fields reaches (x in sub-cells; the top field
  * as far as a key of 31 bits, the words' high half). */
 static void nbs__cs_box_limits(const nbs__cs_keying *kg, double lim[3]) {
@@ -1791,8 +1812,11 @@ static bool nbs__cs_words_boxed512(const nbs__cs_keying *kg, const double *x, in
 
 /* The bytes of the input's coordinates and radii, which choose the gather's path
  * (NBS__CS_PREFETCH_MIN, nbs__cellsort_partition_min). */
+static size_t nbs__input_bytes(int32_t n, int dim, bool radii) {
+  return (size_t)n * (size_t)(dim + (radii ? 1 : 0)) * sizeof(double);
+}
 static size_t nbs__cs_input_bytes(const nbs__cs *c) {
-  return (size_t)c->n * (size_t)(c->dim + (c->rs ? 1 : 0)) * sizeof(double);
+  return nbs__input_bytes(c->n, c->dim, c->rs != NULL);
 }
 
 /* Place p of the cell order (xs, ys, zs, rs) takes element e's coordinates (and radius)
@@ -2215,10 +2239,7 @@ static int64_t nbs__cs_changes(const nbs__run *run, const nbs__cs_keying *kg, ui
     nbs__cs_keying kl = *kg;
     kl.g = &g;
     nbs__cs_box *box = &boxes[t];
-    for (int a = 0; a < 3; a++) {
-      box->lo[a] = DBL_MAX;
-      box->hi[a] = -DBL_MAX;
-    }
+    nbs__cs_box_clear(box);
     uint64_t *r = R + (size_t)t * (size_t)share, *s = S + (size_t)t * (size_t)share;
     int64_t m;
     /* with AVX-512, 8 at a time: 3D steps of 1e-3 29.3-29.8 -> 29.1-29.4, 2D 15.6 -> 15.2 */
@@ -2242,14 +2263,7 @@ static int64_t nbs__cs_changes(const nbs__run *run, const nbs__cs_keying *kg, ui
     memmove(S + m, S + (size_t)t * (size_t)share, (size_t)out[t] * sizeof *S);
     m += out[t];
   }
-  for (int a = 0; a < 3; a++) {
-    lo[a] = a < dim ? boxes[0].lo[a] : 0.0;
-    hi[a] = a < dim ? boxes[0].hi[a] : 0.0;
-    for (int t = 1; t < threads && a < dim; t++) {
-      if (boxes[t].lo[a] < lo[a]) lo[a] = boxes[t].lo[a];
-      if (boxes[t].hi[a] > hi[a]) hi[a] = boxes[t].hi[a];
-    }
-  }
+  nbs__cs_boxes_join(boxes, threads, dim, lo, hi);
   return m;
 }
 
@@ -2846,6 +2860,15 @@ static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__
   return fits;
 }
 
+/* Where step 1 (the keys in element order) puts them, for a sort of `bits` key bits: the
+ * sort's scratch is the coordinate array xs, not yet filled (8 or 12 of its >= 16 bytes per
+ * element), and the passes alternate between it and key[]; with an odd number of them the
+ * keys start in the scratch, so that they end in key[] without a copy (unless a pass is
+ * skipped). */
+static uint64_t *nbs__cs_step1_at(uint64_t *key, double *xs, int bits) {
+  return nbs__radix_digits(bits).passes % 2 == 1 ? (uint64_t *)(void *)xs : key;
+}
+
 /* From scratch: 1. the keys in element order, 2. their radix sort, 3. the gather of the
  * coordinates (and radii) in cell order. */
 static void nbs__cs_sort_gather(const nbs__cs *c, const nbs__run *run, const nbs__cs_keying *kg,
@@ -2856,14 +2879,12 @@ static void nbs__cs_sort_gather(const nbs__cs *c, const nbs__run *run, const nbs
   const int dim = c->dim;
   const double *x = run->x;
   const nbs__digits dg = nbs__radix_digits(bits);
-  /* The sort's scratch is the coordinate array, not yet filled (8 or 12 of its >= 16 bytes
-   * per element). Passes alternate between it and key[]: with an odd number of them the
-   * keys start in the scratch, so that they end in key[] without a copy (unless a pass is
-   * skipped). */
+  /* the sort's scratch: the coordinate arrays (nbs__cs_step1_at) */
   uint64_t *tk = (uint64_t *)(void *)c->xs;
   int32_t *ti = packed ? NULL : (int32_t *)(void *)(c->xs + nn);
-  const bool odd = dg.passes % 2 == 1;
-  uint64_t *k0 = odd ? tk : c->key, *k1 = odd ? c->key : tk;
+  uint64_t *k0 = nbs__cs_step1_at(c->key, c->xs, bits);
+  const bool odd = k0 == tk;
+  uint64_t *k1 = odd ? c->key : tk;
   int32_t *i0 = odd ? ti : c->idx, *i1 = odd ? c->idx : ti;
   /* 1-3 at once, where the input is larger than 1 GiB */
   const size_t input = nbs__cs_input_bytes(c);
@@ -3130,9 +3151,9 @@ typedef struct nbs__cs_plan {
   bool packed;    /* key and element share a word */
 } nbs__cs_plan;
 
-/* The plan of `grid`, or NBS_ERR_EXTENT where an axis has too many cells (1) or the key
- * would not fit 64 bits (2), in *why. */
-static bool nbs__cs_plan_of(const nbs__grid *grid, int dim, int32_t n, nbs__cs_plan *p, int *why) {
+/* The plan of `grid`; false where an axis has too many cells (p->g.fits false) or the key
+ * would not fit 64 bits (p->bits its cells' bits). */
+static bool nbs__cs_plan_of(const nbs__grid *grid, int dim, int32_t n, nbs__cs_plan *p) {
   /* the grid with its axes in the key's order: the rows (the key's x) along the axis with
    * the most cells, where it has at least twice as many as x (nbs__axis_order). A scene thin
    * in x (a wall, a column) would otherwise make rows of an element or two, and the sweep's
@@ -3140,15 +3161,11 @@ static bool nbs__cs_plan_of(const nbs__grid *grid, int dim, int32_t n, nbs__cs_p
   nbs__axis_order(dim, grid->n, 0, p->kc);
   p->g = nbs__grid_reorder(grid, p->kc);
   const nbs__grid *g = &p->g;
-  if (!g->fits) {
-    *why = 1;
-    return false;
-  }
+  if (!g->fits) return false;
   int by = nbs__bits((uint64_t)g->n[1]), bz = nbs__bits((uint64_t)(dim == 3 ? g->n[2] : 1));
   int bx = nbs__bits((uint64_t)g->n[0]), fine_bits = NBS__CS_FINE_BITS;
   /* the packed cell key (iz, iy, x sub-cell) must fit 64 bits */
   if (!nbs__cellsort_fits(g)) {
-    *why = 2;
     p->bits = bx + by + bz;
     return false;
   }
@@ -3195,6 +3212,31 @@ static nbs__cs_keying nbs__cs_keying_of(const nbs__cs_plan *p, int dim) {
 #define NBS__CS_FRESH_MIN 4096
 /* The elements of that guess's sample, evenly spaced in the input. */
 #define NBS__CS_FRESH_SAMPLE 1024
+
+/* The plan of the box of s elements evenly spaced in run's input (its grid as
+ * nbs__grid_measured makes it from a box, with the cells' largest radius rmax), for
+ * nbs__cellsort_fresh: false where a coordinate of them is not finite (input.c's pass names
+ * it), or the plan's keys are not packed with eb = 32 (keys too wide for the pass: input.c's
+ * pass and step 1 as they were). */
+static bool nbs__cs_guess(const nbs__run *run, int64_t s, double rmax, nbs__cs_plan *plan) {
+  const int dim = run->dim;
+  double lo[3] = {0.0, 0.0, 0.0}, hi[3] = {0.0, 0.0, 0.0};
+  for (int a = 0; a < dim; a++) {
+    lo[a] = DBL_MAX;
+    hi[a] = -DBL_MAX;
+  }
+  for (int64_t i = 0; i < s; i++) {
+    const double *p = run->x + (size_t)(i * run->n / s) * (size_t)dim;
+    for (int a = 0; a < dim; a++) {
+      if (!isfinite(p[a])) return false;
+      if (p[a] < lo[a]) lo[a] = p[a];
+      if (p[a] > hi[a]) hi[a] = p[a];
+    }
+  }
+  nbs__run guess = *run;
+  nbs__grid_measured(&guess, lo, hi, rmax);
+  return nbs__cs_plan_of(&guess.grid, dim, run->n, plan) && plan->packed && plan->eb == 32;
+}
 
 /* A detection from scratch reads the input twice before it sorts: input.c's pass (every
  * number finite, and the bounding box, from which the grid), then step 1 (each element's
@@ -3249,60 +3291,35 @@ bool nbs__cellsort_fresh(nbs__run *run, const nbs_input *in, nbs_algorithm asked
   if (nbs__cs_layout(dim, n, run->r != NULL, threads, at, &stride) > ctx->work_size) {
     return false;
   }
-  const size_t input = (size_t)n * (size_t)(dim + (run->r ? 1 : 0)) * sizeof(double);
-  if (input > ctx->cs_part_min) return false;
+  if (nbs__input_bytes(n, dim, run->r != NULL) > ctx->cs_part_min) return false;
   /* the radii, where given, by input.c's pass of them: their largest sizes the cells */
   double rmax = 0.5 * in->diameter;
   if (run->r && !nbs__radii_max(run, &rmax)) return false; /* input.c's passes name it */
 
-  /* the guess: the grid of the sample's box */
-  double lo[3] = {0.0, 0.0, 0.0}, hi[3] = {0.0, 0.0, 0.0};
-  nbs__run guess = *run;
+  /* the guess: the plan of a sample's box */
   nbs__cs_plan plan;
-  for (int64_t s = NBS__CS_FRESH_SAMPLE, first = 1;; first = 0) {
-    for (int a = 0; a < dim; a++) {
-      lo[a] = DBL_MAX;
-      hi[a] = -DBL_MAX;
-    }
-    for (int64_t i = 0; i < s; i++) {
-      const double *p = run->x + (size_t)(i * n / s) * (size_t)dim;
-      for (int a = 0; a < dim; a++) {
-        if (!isfinite(p[a])) return false;
-        if (p[a] < lo[a]) lo[a] = p[a];
-        if (p[a] > hi[a]) hi[a] = p[a];
-      }
-    }
-    nbs__grid_measured(&guess, lo, hi, rmax);
-    int why;
-    if (!nbs__cs_plan_of(&guess.grid, dim, n, &plan, &why) || !plan.packed || plan.eb != 32) {
-      return false; /* keys too wide for this pass: input.c's pass and step 1 as they were */
-    }
-    /* s elements spread evenly over an axis of C cells leave about C / s cells between
-     * the lowest of them and the lowest element: a sample of 16 C, so that the two share a
-     * lattice point more than 9 times in 10 (2D, N = 1e6: 1,253 cells, a sample of 20,048),
-     * but of at most N / 16, a part of the pass it is to save */
-    if (!first) break; /* enlarged once */
-    int64_t more = s;
-    for (int a = 0; a < dim; a++) {
-      if (16 * guess.grid.n[a] > more) more = 16 * guess.grid.n[a];
-    }
-    if (more > n / 16) more = n / 16;
-    if (more <= s) break;
-    s = more;
+  if (!nbs__cs_guess(run, NBS__CS_FRESH_SAMPLE, rmax, &plan)) return false;
+  /* s elements spread evenly over an axis of C cells leave about C / s cells between the
+   * lowest of them and the lowest element: a sample of 16 C, so that the two share a
+   * lattice point more than 9 times in 10 (2D, N = 1e6: 1,253 cells, a sample of 20,048),
+   * but of at most N / 16, a part of the pass it is to save */
+  int64_t more = NBS__CS_FRESH_SAMPLE;
+  for (int a = 0; a < dim; a++) {
+    if (16 * plan.g.n[a] > more) more = 16 * plan.g.n[a];
   }
+  if (more > n / 16) more = n / 16;
+  if (more > NBS__CS_FRESH_SAMPLE && !nbs__cs_guess(run, more, rmax, &plan)) return false;
   const nbs__cs_keying kg = nbs__cs_keying_of(&plan, dim);
 
-  /* step 1 where nbs__cs_sort_gather puts it: in the coordinates' array with an odd number
-   * of passes; the order the block held is gone */
+  /* step 1 where nbs__cs_sort_gather puts it; the order the block held is gone */
   run->order_dropped = order && !run->fresh;
   run->dropped_eb = ctx->cs_order_eb;
   ctx->cs_order_n = 0;
   ctx->cs_kept_ok = false;
   ctx->cs_keys = false;
   char *w = nbs__cs_base(ctx->work);
-  uint64_t *k0 = nbs__radix_digits(plan.bits).passes % 2 == 1
-                     ? (uint64_t *)(void *)(w + at[1])
-                     : (uint64_t *)(void *)w;
+  uint64_t *k0 = nbs__cs_step1_at((uint64_t *)(void *)w, (double *)(void *)(w + at[1]),
+                                  plan.bits);
   nbs__cs_box boxes[NBS__THREADS_MAX];
   bool outside = false;
   const double *x = run->x;
@@ -3315,10 +3332,7 @@ bool nbs__cellsort_fresh(nbs__run *run, const nbs_input *in, nbs_algorithm asked
     nbs__cs_keying kl = kg;
     kl.g = &g;
     nbs__cs_box *box = &boxes[t];
-    for (int a = 0; a < 3; a++) {
-      box->lo[a] = DBL_MAX;
-      box->hi[a] = -DBL_MAX;
-    }
+    nbs__cs_box_clear(box);
     bool in_box;
 #if NBS__CS_AVX512
     if (ctx->simd == NBS__SIMD_AVX512) {
@@ -3331,14 +3345,8 @@ bool nbs__cellsort_fresh(nbs__run *run, const nbs_input *in, nbs_algorithm asked
     if (!in_box) outside = true;
   }
   if (outside) return false;
-  for (int a = 0; a < dim; a++) {
-    lo[a] = boxes[0].lo[a];
-    hi[a] = boxes[0].hi[a];
-    for (int t = 1; t < threads; t++) {
-      if (boxes[t].lo[a] < lo[a]) lo[a] = boxes[t].lo[a];
-      if (boxes[t].hi[a] > hi[a]) hi[a] = boxes[t].hi[a];
-    }
-  }
+  double lo[3], hi[3];
+  nbs__cs_boxes_join(boxes, threads, dim, lo, hi);
   nbs__grid_measured(run, lo, hi, rmax);
   /* the keying the words were made with, for nbs__cellsort to compare with its own */
   run->pre = nbs__cs_kept_of(&kg);
@@ -3354,11 +3362,10 @@ nbs_status nbs__cellsort(nbs__run *run) {
   run->ran = NBS_CELLSORT;
   run->compressed = false;
   nbs__cs_plan plan;
-  int why = 0;
-  const bool planned = nbs__cs_plan_of(&run->grid, dim, n, &plan, &why);
+  const bool planned = nbs__cs_plan_of(&run->grid, dim, n, &plan);
   const int *kc = plan.kc;
   for (int a = 0; a < 3; a++) ctx->axes[a] = (int8_t)kc[a];
-  if (!planned && why == 1) {
+  if (!planned && !plan.g.fits) {
     return nbs__fail(ctx, NBS_ERR_EXTENT, -1,
                      "cellsort: the domain spans more than %lld cells on an axis; use 'auto'",
                      (long long)NBS__AXIS_MAX);
