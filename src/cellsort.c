@@ -629,12 +629,17 @@ static size_t nbs__cs_block_generic(const nbs__cs *c, int32_t c0, int lanes,
  * fma(a, 1, b), which rounds as a + b does: 33.4 -> 34.0, and the z difference with them
  * 34.8: the adders are not what bounds the steps. The kernel called directly from the sweep
  * compiled for it (a constant, inlined, not a pointer): 33.2 / 33.4. */
+/* Where the AVX-512 kernel reads q's element, a constant of each of its copies: the idx
+ * array (unpacked keys), the low half of a packed word that is the element alone (imask
+ * all ones), or one whose low bits hold the element under the key's (ANDed with imask). */
+enum { NBS__CS_IDX, NBS__CS_WHOLE, NBS__CS_MASKED };
 static inline __attribute__((always_inline)) NBS__CS_AVX512_TARGET size_t
-nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, bool whole,
+nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int form,
                       int32_t c0, int lanes, const nbs__cs_ranges *rg, nbs_pair *out) {
   const double *X = c->xs, *Y = c->ys, *Z = c->zs, *R = c->rs;
   const int32_t *ids = c->ids;
-  const size_t istep = (size_t)c->istep;
+  const bool whole = form != NBS__CS_MASKED;
+  const size_t istep = form == NBS__CS_IDX ? 1 : 2;
   const int32_t imask = (int32_t)c->imask;
   const __mmask8 im = (__mmask8)((1u << lanes) - 1);
   /* Lanes past the block hold NaN in x: their distance compares false, so the steps over
@@ -642,7 +647,12 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, bool
    * q's element number ANDed from a broadcast load (one instruction where a scalar load, an
    * AND and a broadcast were three), 20 instructions a step instead of 23: 3D, N = 1e6,
    * interleaved with the build before, min of 8: 33.8 -> 32.8 ns per element (the load alone
-   * was within noise); 2D the same within noise. */
+   * was within noise); 2D the same within noise. Then two more: q's element read at
+   * q * istep with istep a constant of the kernel's copy (form), not a pointer moved by it
+   * at every step, and the pairs' place a pointer moved by each step's count, whose store
+   * then needs no address of its own (3D, N = 1e6, interleaved with 585a76a, medians of 8:
+   * search 14.02 -> 13.39 and 14.34 -> 13.84 ns per element; 1e7 14.53 -> 13.82; 1e4 with
+   * four decoys 14.97 -> 14.21; 2D 5.76 -> 5.71 and, the pointer alone, 5.52 -> 5.39). */
   const __m512d PX = _mm512_mask_loadu_pd(_mm512_set1_pd(__builtin_nan("")), im, X + c0);
   const __m512d PY = _mm512_maskz_loadu_pd(im, Y + c0);
   const __m512d PZ = dim == 3 ? _mm512_maskz_loadu_pd(im, Z + c0) : _mm512_setzero_pd();
@@ -683,11 +693,11 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, bool
     const __m512i found = _mm512_maskz_compress_epi64(hit, pr);                               \
     const unsigned nfound = (unsigned)__builtin_popcount(hit);                                \
     if (__builtin_expect(nfound > 4, 0)) {                                                    \
-      _mm512_storeu_si512((void *)(out + m), found);                                          \
+      _mm512_storeu_si512((void *)o, found);                                                  \
     } else {                                                                                  \
-      _mm256_storeu_si256((__m256i *)(void *)(out + m), _mm512_castsi512_si256(found));       \
+      _mm256_storeu_si256((__m256i *)(void *)o, _mm512_castsi512_si256(found));               \
     }                                                                                         \
-    m += nfound;                                                                              \
+    o += nfound;                                                                              \
   } while (0)
   /* The ranges before the block meet every lane (the last range ends with the block, see
    * nbs__cs_offer). A step stores its pairs, most often none or one, in 32 bytes unless it
@@ -705,7 +715,15 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, bool
    * a time, and the steps one loop over it (one exit per block; 6.8-7.1 cycles in that
    * program), 3D N = 1e6 search 14.9-15.1 -> 14.7-14.8 ns per element, but 1e4 10.8-10.9
    * -> 12.6-13.1 and 2D 1e6 5.6-5.7 -> 6.1-6.4 (interleaved, min of 5, one thread, three
-   * runs each). Also tried and left out: half blocks. Lanes 0-3 and 4-7 each span about 3
+   * runs each). What the exits cost at most, measured on 585a76a by running each of the
+   * four neighbouring rows' ranges for exactly 10 places (a wrong output, for the timing
+   * only; about as many steps as the windows' mean): 3D N = 1e6 search 14.4-14.8 -> 13.0-13.3
+   * ns per element, so about 1.4. Tried and left out, for that: two ranges in one loop, q
+   * moved from the first range to the second by a select, not a branch (three exits per
+   * block instead of five; the same bytes): search 14.6-15.5 -> 15.3-15.7, interleaved, four
+   * runs each. The two exits saved cost less than the four instructions it adds to every
+   * step: the steps are bound by their instructions, so a way around the exits must add
+   * none to a step. Also tried and left out: half blocks. Lanes 0-3 and 4-7 each span about 3
    * diameters in x, and of a neighbouring row's window (about 9 places) a q within one edge
    * of one half only is about 4 places either side; so each window was split by two
    * vector counts of its keys, and a step tested one q against lanes 0-3 and another
@@ -714,10 +732,12 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, bool
    * element (a first version, which also found some pairs twice): three loops per window
    * where there was one, and four more instructions a step. */
   const int last = rg->count - 1;
+  nbs_pair *o = out;
   for (int r = 0; r < rg->count; r++) {
     const int32_t q1 = r == last && rg->q1[r] > c0 ? c0 : rg->q1[r];
     for (int32_t q = rg->q0[r]; q < q1; q++) NBS__CS_STEP512(q);
   }
+  m = (size_t)(o - out);
 #undef NBS__CS_STEP512
   /* The block's own pairs, by rotation: lane l against lane (l + k) mod 8 for k = 1, 2, 3
    * (every pair whose lanes are 1, 2, 3, 5, 6 or 7 apart, once) and k = 4 for l < 4: 28
@@ -761,11 +781,11 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, bool
 NBS__CS_AVX512_TARGET
 static size_t nbs__cs_block_avx512(const nbs__cs *c, int32_t c0, int lanes,
                                    const nbs__cs_ranges *rg, nbs_pair *out) {
-  /* whole: q's number is the whole int32 it reads (imask all ones), no AND */
+  if (c->istep == 1) return NBS__CS_DISPATCH(nbs__cs_block512_body, c, NBS__CS_IDX, c0, lanes, rg, out);
   if (c->imask == UINT32_MAX) {
-    return NBS__CS_DISPATCH(nbs__cs_block512_body, c, true, c0, lanes, rg, out);
+    return NBS__CS_DISPATCH(nbs__cs_block512_body, c, NBS__CS_WHOLE, c0, lanes, rg, out);
   }
-  return NBS__CS_DISPATCH(nbs__cs_block512_body, c, false, c0, lanes, rg, out);
+  return NBS__CS_DISPATCH(nbs__cs_block512_body, c, NBS__CS_MASKED, c0, lanes, rg, out);
 }
 
 /* The AVX2 kernel, for processors without AVX-512: the block's 8 lanes in two registers of

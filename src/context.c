@@ -196,7 +196,9 @@ int nbs__threads(const nbs_context *ctx, int64_t useful) {
 
 /* Tried and left out: madvise(MADV_HUGEPAGE) on the new block (this machine's transparent
  * huge pages are given on request only): 3D cellsort, N = 1e6, 30.3 -> 29.6 ns per element,
- * N = 1e7 42.3 -> 58.5 (interleaved, min of 5). */
+ * N = 1e7 42.3 -> 58.5 (interleaved, min of 5). Again on 585a76a (Zen 5; the kernel then gave
+ * the block's huge pages, /proc/vmstat's thp_fault_alloc): auto, N = 1e6, medians of 12
+ * interleaved processes 25.10 -> 25.03, N = 1e7 25.66 -> 25.51, within the noise. */
 nbs_status nbs__work_reserve(nbs_context *ctx, size_t bytes) {
   if (bytes <= ctx->work_size) return NBS_OK;
   void *p = nbs__alloc(ctx, bytes);
