@@ -1156,6 +1156,21 @@ static void test_fresh_pass(void) {
   CHECK_MSG(took > 0, "no detection took the guessed keys");
 }
 
+/* The kernels' cases: the fixed ones, then two whose keys are wider than 31 bits, so that
+ * the SIMD kernels read each element's number in their two other forms: from a packed word
+ * under its key (3D, 3000 diameters a side: keys of 39 bits and 12 for the element), and
+ * from the array of elements of unpacked keys (3D, 2^19 diameters a side: 60 bits). Pairs
+ * at a distance of D up to rounding, so that both find contacts. */
+#define NKERNEL_CASES (NCASES + 2)
+static scene kernel_case(size_t c, const char **name) {
+  if (c < NCASES) {
+    *name = cases[c].name;
+    return make_case(c);
+  }
+  *name = c == NCASES ? "near-ties-3d-masked" : "near-ties-3d-unpacked";
+  return det_scene(DET_NEAR_TIES, 3, 4000, c == NCASES ? 3000.0 : 0x1p19, 0.0, 21 + c);
+}
+
 /* Kernels: cellsort's generic kernel (asked for with NBS_SIMD=generic, read when a context
  * is created) gives the same bytes in the same order as the one the processor gets by
  * default and as the AVX2 one (NBS_SIMD=avx2), on every case and both modes. Where the
@@ -1163,8 +1178,9 @@ static void test_fresh_pass(void) {
  * comparison still holds. */
 static void test_kernels(void) {
   const char *const kernels[] = {NULL, "avx2"};
-  for (size_t c = 0; c < NCASES; c++) {
-    scene s = make_case(c);
+  for (size_t c = 0; c < NKERNEL_CASES; c++) {
+    const char *name;
+    scene s = kernel_case(c, &name);
     for (size_t kn = 0; kn < sizeof kernels / sizeof *kernels; kn++) {
       for (int mode = 0; mode < 2; mode++) {
         nbs_context *other, *generic;
@@ -1183,7 +1199,7 @@ static void test_kernels(void) {
         ASSERT_OK(st == NBS_ERR_EXTENT ? NBS_OK : st);
         ASSERT_OK(detect_raw(generic, &s, algo, (nbs_mode)mode, &b));
         CHECK_MSG(same_bytes(&a, &b), "%s %s mode %d: the %s kernel differs from the generic one",
-                  cases[c].name, nbs_algorithm_name(algo), mode,
+                  name, nbs_algorithm_name(algo), mode,
                   kernels[kn] ? kernels[kn] : "default");
         pair_list_free(&a);
         pair_list_free(&b);
@@ -1193,11 +1209,11 @@ static void test_kernels(void) {
         if (st == NBS_OK) {
           ASSERT_OK(detect_raw(generic, &s, NBS_NBS, (nbs_mode)mode, &b));
           CHECK_MSG(same_bytes(&a, &b), "%s nbs mode %d: the %s test differs from the plain one",
-                    cases[c].name, mode, kernels[kn] ? kernels[kn] : "default");
+                    name, mode, kernels[kn] ? kernels[kn] : "default");
           pair_list_free(&a);
           pair_list_free(&b);
         } else {
-          CHECK_MSG(st == NBS_ERR_BUDGET || st == NBS_ERR_EXTENT, "%s nbs: %s", cases[c].name,
+          CHECK_MSG(st == NBS_ERR_BUDGET || st == NBS_ERR_EXTENT, "%s nbs: %s", name,
                     nbs_status_name(st));
         }
         nbs_context_destroy(other);
