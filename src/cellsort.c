@@ -715,10 +715,17 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int 
    * a time, and the steps one loop over it (one exit per block; 6.8-7.1 cycles in that
    * program), 3D N = 1e6 search 14.9-15.1 -> 14.7-14.8 ns per element, but 1e4 10.8-10.9
    * -> 12.6-13.1 and 2D 1e6 5.6-5.7 -> 6.1-6.4 (interleaved, min of 5, one thread, three
-   * runs each). What the exits cost at most, measured on 585a76a by running each of the
-   * four neighbouring rows' ranges for exactly 10 places (a wrong output, for the timing
-   * only; about as many steps as the windows' mean): 3D N = 1e6 search 14.4-14.8 -> 13.0-13.3
-   * ns per element, so about 1.4. Tried and left out, for that: two ranges in one loop, q
+   * runs each). What the exits cost, measured on 585a76a and ff1b1cf by running each of the
+   * neighbouring rows' ranges for a fixed number of places (a wrong output, for the timing
+   * only; the ranges that are not empty hold 8.65 places on average): 3D N = 1e6, 10 places
+   * each, search 14.4-14.8 -> 13.0-13.3 ns per element; 9 places (more steps than the true
+   * lengths), with counters in the loop, 14.7-14.8 -> 12.5-13.0; 8 places 11.8-12.0. So the
+   * exits cost about 2 ns, some 16 cycles a block (an earlier such test, recorded in
+   * bench/README, found no difference: this one does). The ways around them found so far
+   * cost more: a fixed number of steps per range wastes a step for every place it runs past
+   * a window (lengths vary by about 3 places), the ranges interleaved two or four at a time
+   * likewise (by the longest's excess), the list above adds a load to every step and its
+   * building to every block. Tried and left out, for that: two ranges in one loop, q
    * moved from the first range to the second by a select, not a branch (three exits per
    * block instead of five; the same bytes): search 14.6-15.5 -> 15.3-15.7, interleaved, four
    * runs each. The two exits saved cost less than the four instructions it adds to every
