@@ -711,26 +711,33 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int 
    * The loop over each range ends in an exit the branch predictor can miss, five per block
    * in 3D; a test program of these steps (a block against five ranges of 6-14 places each)
    * took 7.5-7.8 cycles a step, 5.9-6.1 with ranges of 8 places each and 5.3-5.5 with one
-   * range of 43. Tried and left out: the ranges' places first written to a list, sixteen at
-   * a time, and the steps one loop over it (one exit per block; 6.8-7.1 cycles in that
-   * program), 3D N = 1e6 search 14.9-15.1 -> 14.7-14.8 ns per element, but 1e4 10.8-10.9
-   * -> 12.6-13.1 and 2D 1e6 5.6-5.7 -> 6.1-6.4 (interleaved, min of 5, one thread, three
-   * runs each). What the exits cost, measured on 585a76a and ff1b1cf by running each of the
+   * range of 43. So in 3D the ranges' places are first written to a list, sixteen at a
+   * time, and the steps are one loop over it: one exit per block instead of five, for a load
+   * more a step and the list's stores. Measured on dc90213 (3D, interleaved with the loops
+   * per range, medians of 2-6 processes, search in ns per element, the same bytes): N = 1e6
+   * 14.06 -> 13.39 and 14.53 -> 13.71; 1e7 14.54 -> 13.71; 1e5 14.02 -> 13.07; time steps
+   * of 1e-3 14.43 -> 13.59; sparse (fraction 0.005) 19.71 -> 17.61; clustered 14.18 ->
+   * 13.44; huge 17.31 -> 17.42; 1e4 with four decoys 14.66 -> 13.22, but 1e4 repeated alone
+   * 10.74 -> 12.43: there the branch predictor has learned every exit of the one scene (see
+   * nbs_bench --decoys), and the list only costs. An earlier try (before the sweep lost its
+   * two stalls, 6c9ec26 and 699d7d5) gained 0.2 at 1e6, and the same losses at 1e4. In 2D,
+   * whose blocks meet two ranges, the list cost more than it saved (1e6 5.70 -> 6.65), and
+   * in the AVX2 kernel, whose step is two halves, it was mixed (3D 1e6 20.71 -> 21.52, 1e4
+   * with decoys 20.65 -> 19.49): both keep a loop per range.
+   * What the exits cost, measured on 585a76a and ff1b1cf by running each of the
    * neighbouring rows' ranges for a fixed number of places (a wrong output, for the timing
    * only; the ranges that are not empty hold 8.65 places on average): 3D N = 1e6, 10 places
    * each, search 14.4-14.8 -> 13.0-13.3 ns per element; 9 places (more steps than the true
    * lengths), with counters in the loop, 14.7-14.8 -> 12.5-13.0; 8 places 11.8-12.0. So the
    * exits cost about 2 ns, some 16 cycles a block (an earlier such test, recorded in
-   * bench/README, found no difference: this one does). The ways around them found so far
-   * cost more: a fixed number of steps per range wastes a step for every place it runs past
-   * a window (lengths vary by about 3 places), the ranges interleaved two or four at a time
-   * likewise (by the longest's excess), the list above adds a load to every step and its
-   * building to every block. Tried and left out, for that: two ranges in one loop, q
-   * moved from the first range to the second by a select, not a branch (three exits per
-   * block instead of five; the same bytes): search 14.6-15.5 -> 15.3-15.7, interleaved, four
-   * runs each. The two exits saved cost less than the four instructions it adds to every
-   * step: the steps are bound by their instructions, so a way around the exits must add
-   * none to a step. Also tried and left out: half blocks. Lanes 0-3 and 4-7 each span about 3
+   * bench/README, found no difference: this one does); the list takes back about 0.8 of it.
+   * Other ways around them cost more: a fixed number of steps per range wastes a step for
+   * every place it runs past a window (lengths vary by about 3 places), the ranges
+   * interleaved two or four at a time likewise (by the longest's excess). Tried and left
+   * out: two ranges in one loop, q moved from the first range to the second by a select,
+   * not a branch (three exits per block instead of five; the same bytes): search 14.6-15.5
+   * -> 15.3-15.7, interleaved, four runs each: four instructions more a step. Also tried
+   * and left out: half blocks. Lanes 0-3 and 4-7 each span about 3
    * diameters in x, and of a neighbouring row's window (about 9 places) a q within one edge
    * of one half only is about 4 places either side; so each window was split by two
    * vector counts of its keys, and a step tested one q against lanes 0-3 and another
@@ -740,9 +747,31 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int 
    * where there was one, and four more instructions a step. */
   const int last = rg->count - 1;
   nbs_pair *o = out;
-  for (int r = 0; r < rg->count; r++) {
-    const int32_t q1 = r == last && rg->q1[r] > c0 ? c0 : rg->q1[r];
-    for (int32_t q = rg->q0[r]; q < q1; q++) NBS__CS_STEP512(q);
+  if (dim == 3) {
+    /* 3D: the ranges' places in a list, one loop over it (see above) */
+    int32_t list[NBS__CS_SLICE + 16];
+    int32_t total = 0;
+    const __m512i iota = _mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0);
+    for (int r = 0; r < rg->count; r++) {
+      const int32_t q0 = rg->q0[r];
+      const int32_t q1 = r == last && rg->q1[r] > c0 ? c0 : rg->q1[r];
+      __m512i v = _mm512_add_epi32(_mm512_set1_epi32(q0), iota);
+      _mm512_storeu_si512((void *)(list + total), v);
+      for (int32_t k = 16; k < q1 - q0; k += 16) {
+        v = _mm512_add_epi32(v, _mm512_set1_epi32(16));
+        _mm512_storeu_si512((void *)(list + total + k), v);
+      }
+      total += q1 - q0;
+    }
+    for (int32_t k = 0; k < total; k++) {
+      const int32_t q = list[k];
+      NBS__CS_STEP512(q);
+    }
+  } else {
+    for (int r = 0; r < rg->count; r++) {
+      const int32_t q1 = r == last && rg->q1[r] > c0 ? c0 : rg->q1[r];
+      for (int32_t q = rg->q0[r]; q < q1; q++) NBS__CS_STEP512(q);
+    }
   }
   m = (size_t)(o - out);
 #undef NBS__CS_STEP512
