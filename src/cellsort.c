@@ -664,10 +664,15 @@ static size_t nbs__cs_block_generic(const nbs__cs *c, int32_t c0, int lanes,
  * fma(a, 1, b), which rounds as a + b does: 33.4 -> 34.0, and the z difference with them
  * 34.8: the adders are not what bounds the steps. The kernel called directly from the sweep
  * compiled for it (a constant, inlined, not a pointer): 33.2 / 33.4. */
-/* Where the AVX-512 kernel reads q's element, a constant of each of its copies: the idx
+/* Where the SIMD kernels read q's element, a constant of each of their copies: the idx
  * array (unpacked keys), the low half of a packed word that is the element alone (imask
- * all ones), or one whose low bits hold the element under the key's (ANDed with imask). */
+ * all ones), or one whose low bits hold the element under the key's (ANDed with imask).
+ * NBS__CS_FORMS calls the copy of c's form. */
 enum { NBS__CS_IDX, NBS__CS_WHOLE, NBS__CS_MASKED };
+#define NBS__CS_FORMS(body, c, ...)                                                            \
+  ((c)->istep == 1            ? NBS__CS_DISPATCH(body, c, NBS__CS_IDX, __VA_ARGS__)            \
+   : (c)->imask == UINT32_MAX ? NBS__CS_DISPATCH(body, c, NBS__CS_WHOLE, __VA_ARGS__)          \
+                              : NBS__CS_DISPATCH(body, c, NBS__CS_MASKED, __VA_ARGS__))
 static inline __attribute__((always_inline)) NBS__CS_AVX512_TARGET size_t
 nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int form,
                       int32_t c0, int lanes, const nbs__cs_ranges *rg, nbs_pair *out) {
@@ -703,7 +708,7 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int 
                        _mm512_set_epi32(14, 14, 12, 12, 10, 10, 8, 8, 6, 6, 4, 4, 2, 2, 0, 0),
                        _mm512_maskz_loadu_epi64(im, ids + 2 * (size_t)c0)));
   const __m512i IMASK = _mm512_set1_epi32(imask);
-  size_t m = 0;
+  nbs_pair *o = out; /* where the next pairs go */
   /* one q against the block's lanes */
 #define NBS__CS_STEP512(q)                                                                \
   do {                                                                                        \
@@ -781,9 +786,10 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int 
    * element (a first version, which also found some pairs twice): three loops per window
    * where there was one, and four more instructions a step. */
   const int last = rg->count - 1;
-  nbs_pair *o = out;
   if (dim == 3) {
-    /* 3D: the ranges' places in a list, one loop over it (see above) */
+    /* 3D: the ranges' places in a list, one loop over it (see above). At most
+     * NBS__CS_SLICE places (nbs__cs_offer slices longer ranges), written sixteen at a time:
+     * up to 15 past the last. */
     int32_t list[NBS__CS_SLICE + 16];
     int32_t total = 0;
     const __m512i iota = _mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0);
@@ -808,7 +814,6 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int 
       for (int32_t q = rg->q0[r]; q < q1; q++) NBS__CS_STEP512(q);
     }
   }
-  m = (size_t)(o - out);
 #undef NBS__CS_STEP512
   /* The block's own pairs, by rotation: lane l against lane (l + k) mod 8 for k = 1, 2, 3
    * (every pair whose lanes are 1, 2, 3, 5, 6 or 7 apart, once) and k = 4 for l < 4: 28
@@ -843,20 +848,16 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int 
     const __mmask8 hit = contacts ? _mm512_mask_cmp_pd_mask(keep, d, lim, _CMP_LE_OQ) : keep;
     const __m512i IQ2 = _mm512_permutexvar_epi64(rot, IP2);
     const __m512i pr = _mm512_mask_max_epi32(_mm512_min_epi32(IP2, IQ2), 0xAAAA, IP2, IQ2);
-    _mm512_storeu_si512((void *)(out + m), _mm512_maskz_compress_epi64(hit, pr));
-    m += (size_t)__builtin_popcount(hit);
+    _mm512_storeu_si512((void *)o, _mm512_maskz_compress_epi64(hit, pr));
+    o += (unsigned)__builtin_popcount(hit);
   }
-  return m;
+  return (size_t)(o - out);
 }
 
 NBS__CS_AVX512_TARGET NBS__CS_PLACED
 static size_t nbs__cs_block_avx512(const nbs__cs *c, int32_t c0, int lanes,
                                    const nbs__cs_ranges *rg, nbs_pair *out) {
-  if (c->istep == 1) return NBS__CS_DISPATCH(nbs__cs_block512_body, c, NBS__CS_IDX, c0, lanes, rg, out);
-  if (c->imask == UINT32_MAX) {
-    return NBS__CS_DISPATCH(nbs__cs_block512_body, c, NBS__CS_WHOLE, c0, lanes, rg, out);
-  }
-  return NBS__CS_DISPATCH(nbs__cs_block512_body, c, NBS__CS_MASKED, c0, lanes, rg, out);
+  return NBS__CS_FORMS(nbs__cs_block512_body, c, c0, lanes, rg, out);
 }
 
 /* The AVX2 kernel, for processors without AVX-512: the block's 8 lanes in two registers of
@@ -978,11 +979,7 @@ static size_t nbs__cs_block_avx2(const nbs__cs *c, int32_t c0, int lanes,
   /* the three forms of q's element, as for the AVX-512 kernel (and the pairs' place a
    * pointer): with NBS_SIMD=avx2 on the benchmark machine, 3D N = 1e6, interleaved with
    * 8851642, medians of 6, search 20.66 -> 19.94 ns per element; 2D 7.79 -> 7.31 */
-  if (c->istep == 1) return NBS__CS_DISPATCH(nbs__cs_block256_body, c, NBS__CS_IDX, c0, lanes, rg, out);
-  if (c->imask == UINT32_MAX) {
-    return NBS__CS_DISPATCH(nbs__cs_block256_body, c, NBS__CS_WHOLE, c0, lanes, rg, out);
-  }
-  return NBS__CS_DISPATCH(nbs__cs_block256_body, c, NBS__CS_MASKED, c0, lanes, rg, out);
+  return NBS__CS_FORMS(nbs__cs_block256_body, c, c0, lanes, rg, out);
 }
 #endif
 
