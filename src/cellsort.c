@@ -566,7 +566,34 @@ static nbs_status nbs__sink_one(nbs__sink *s, nbs_pair one) {
 struct nbs__cs_ranges {
   int count;
   int32_t q0[NBS__CS_RANGES], q1[NBS__CS_RANGES];
+  /* places >= 0: the places of the ranges before the block, in order (the last range up to
+   * the block only), listed by the AVX-512 sweep as it found the ranges (nbs__cs_list), or
+   * by nbs__cs_offer_slices for a slice; the AVX-512 kernel's steps are then one loop over
+   * them. -1: not listed (the other kernels' sweeps, and 2D rows swept element by element,
+   * never in 3D); the kernel loops over each range. */
+  int32_t places;
+  const int32_t *list; /* where places >= 0 */
 };
+/* Sixteen places, as GCC's vector extension (no target needed: only the AVX-512 sweep
+ * lists, and there it is one add and one store). */
+typedef int32_t nbs__cs_v16i __attribute__((vector_size(64)));
+/* Appends the places [q0, q1) to the list of t (q1 >= q0; returns t + q1 - q0), written
+ * sixteen at a time: up to 15 past the last, where the list has room for them. A list of
+ * more than NBS__CS_SLICE places is not used (nbs__cs_offer slices its ranges), so nothing
+ * is written past that. */
+static inline __attribute__((always_inline)) int32_t nbs__cs_list(int32_t *list, int32_t t,
+                                                                  int32_t q0, int32_t q1) {
+  if (__builtin_expect(t <= NBS__CS_SLICE, 1)) {
+    const nbs__cs_v16i iota = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15};
+    nbs__cs_v16i v = iota + q0;
+    __builtin_memcpy(list + t, &v, sizeof v);
+    for (int32_t k = 16; __builtin_expect(k < q1 - q0, 0) && t + k <= NBS__CS_SLICE; k += 16) {
+      v += 16;
+      __builtin_memcpy(list + t + k, &v, sizeof v);
+    }
+  }
+  return t + (q1 - q0);
+}
 
 /* The generic kernel: plain C, one lane after another. */
 static inline __attribute__((always_inline)) size_t
@@ -751,26 +778,40 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int 
    * The loop over each range ends in an exit the branch predictor can miss, five per block
    * in 3D; a test program of these steps (a block against five ranges of 6-14 places each)
    * took 7.5-7.8 cycles a step, 5.9-6.1 with ranges of 8 places each and 5.3-5.5 with one
-   * range of 43. So in 3D the ranges' places are first written to a list, sixteen at a
-   * time, and the steps are one loop over it: one exit per block instead of five, for a load
-   * more a step and the list's stores. Measured on dc90213 (3D, interleaved with the loops
-   * per range, medians of 2-6 processes, search in ns per element, the same bytes): N = 1e6
+   * range of 43. So the ranges' places are written to a list, and the steps are one loop
+   * over it: one exit per block instead of five (3D) or two (2D), for a load more a step and
+   * the list's stores. First (3ace1a4, 3D only) the kernel wrote the list, sixteen places
+   * at a time, before its steps (measured on dc90213, 3D, interleaved with the loops per
+   * range, medians of 2-6 processes, search in ns per element, the same bytes): N = 1e6
    * 14.06 -> 13.39 and 14.53 -> 13.71; 1e7 14.54 -> 13.71; 1e5 14.02 -> 13.07; time steps
    * of 1e-3 14.43 -> 13.59; sparse (fraction 0.005) 19.71 -> 17.61; clustered 14.18 ->
    * 13.44; huge 17.31 -> 17.42; 1e4 with four decoys 14.66 -> 13.22, but 1e4 repeated alone
-   * 10.74 -> 12.43: there the branch predictor has learned every exit of the one scene (see
-   * nbs_bench --decoys), and the list only costs. An earlier try (before the sweep lost its
-   * two stalls, 6c9ec26 and 699d7d5) gained 0.2 at 1e6, and the same losses at 1e4. In 2D,
-   * whose blocks meet two ranges, the list cost more than it saved (1e6 5.70 -> 6.65), and
-   * in the AVX2 kernel, whose step is two halves, it was mixed (3D 1e6 20.71 -> 21.52, 1e4
-   * with decoys 20.65 -> 19.49): both keep a loop per range.
+   * 10.74 -> 12.43 (there the branch predictor has learned every exit of the one scene: see
+   * nbs_bench --decoys); in 2D it cost more than it saved (1e6 5.70 -> 6.65). Now the
+   * AVX-512 sweep writes the list (nbs__cs_list) as it finds each range, where its stores
+   * sit among the window searches, which wait on loads, and the kernel only reads it
+   * (interleaved with 313d687, medians of 3-6 processes, search in ns per element, the same
+   * bytes): 3D N = 1e6 13.04 -> 12.53 and 12.90 -> 12.14; 1e7 13.40 -> 12.69; 1e4 12.34 ->
+   * 11.22, with four decoys 13.01 -> 12.06; sparse 13.20 -> 12.74; clustered 12.89 -> 12.49;
+   * time steps of 1e-3 13.21 -> 12.80; but huge 16.47 -> 16.81 and 16.44 -> 17.12 (its
+   * blocks seldom meet anything and the list is next to never written: the sweep's code is
+   * laid out otherwise). 2D: 1e6 5.69 -> 5.07; 1e7 5.51 -> 4.97; 1e4 3.93 -> 3.83; sparse
+   * 5.68 -> 5.27; clustered 5.73 -> 5.20; huge 7.03 -> 7.56.
+   * The list written after all the ranges were found, just before the kernel, gained less
+   * (3D 1e6 12.64 -> 12.45), and written after the neighbouring rows' windows, before the
+   * own row's, about half (12.83 -> 12.50), but nothing lost in huge (16.71 -> 16.86);
+   * against it, written range by range: 3D 1e6 12.41 -> 11.98, sparse 12.71 -> 12.41, huge
+   * 16.12 -> 16.73. The AVX2 kernel, whose step is two halves, keeps a loop per range: with the list
+   * its search took 18.90 -> 20.70 (3D 1e6) and 7.06 -> 9.18 (2D), NBS_SIMD=avx2 (and with
+   * the list written by the kernel, mixed: 3D 1e6 20.71 -> 21.52, 1e4 with decoys 20.65 ->
+   * 19.49).
    * What the exits cost, measured on 585a76a and ff1b1cf by running each of the
    * neighbouring rows' ranges for a fixed number of places (a wrong output, for the timing
    * only; the ranges that are not empty hold 8.65 places on average): 3D N = 1e6, 10 places
    * each, search 14.4-14.8 -> 13.0-13.3 ns per element; 9 places (more steps than the true
    * lengths), with counters in the loop, 14.7-14.8 -> 12.5-13.0; 8 places 11.8-12.0. So the
    * exits cost about 2 ns, some 16 cycles a block (an earlier such test, recorded in
-   * bench/README, found no difference: this one does); the list takes back about 0.8 of it.
+   * bench/README, found no difference: this one does).
    * Other ways around them cost more: a fixed number of steps per range wastes a step for
    * every place it runs past a window (lengths vary by about 3 places), the ranges
    * interleaved two or four at a time likewise (by the longest's excess). Tried and left
@@ -786,25 +827,13 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int 
    * element (a first version, which also found some pairs twice): three loops per window
    * where there was one, and four more instructions a step. */
   const int last = rg->count - 1;
-  if (dim == 3) {
-    /* 3D: the ranges' places in a list, one loop over it (see above). At most
-     * NBS__CS_SLICE places (nbs__cs_offer slices longer ranges), written sixteen at a time:
-     * up to 15 past the last. */
-    int32_t list[NBS__CS_SLICE + 16];
-    int32_t total = 0;
-    const __m512i iota = _mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0);
-    for (int r = 0; r < rg->count; r++) {
-      const int32_t q0 = rg->q0[r];
-      const int32_t q1 = r == last && rg->q1[r] > c0 ? c0 : rg->q1[r];
-      __m512i v = _mm512_add_epi32(_mm512_set1_epi32(q0), iota);
-      _mm512_storeu_si512((void *)(list + total), v);
-      for (int32_t k = 16; k < q1 - q0; k += 16) {
-        v = _mm512_add_epi32(v, _mm512_set1_epi32(16));
-        _mm512_storeu_si512((void *)(list + total + k), v);
-      }
-      total += q1 - q0;
-    }
-    for (int32_t k = 0; k < total; k++) {
+  /* (in 3D every caller lists: one copy of the steps, not two; a second, for ranges not
+   * listed, made the 3D search 0.2-0.9 ns per element slower) */
+  if (dim == 3 || rg->places >= 0) {
+    /* in locals: read through rg, both were loaded again at every step (the pairs' stores
+     * might have changed them, as far as the compiler knows) */
+    const int32_t *list = rg->list, places = rg->places;
+    for (int32_t k = 0; k < places; k++) {
       const int32_t q = list[k];
       NBS__CS_STEP512(q);
     }
@@ -1032,6 +1061,7 @@ size_t nbs__cellsort_partition_min(void) {
  * callback's batch smaller than a slice, or max_pairs in reach). Same pairs, same order. */
 static nbs_status nbs__cs_offer_slices(const nbs__cs *c, nbs__sink *s, int32_t c0, int lanes,
                                        const nbs__cs_ranges *rg) {
+  int32_t list[NBS__CS_SLICE + 16]; /* each slice's places, listed for any kernel */
   for (int r = 0; r < rg->count; r++) {
     /* the part before the block, then the block alone */
     const bool own = r == rg->count - 1 && rg->q1[r] > c0;
@@ -1039,7 +1069,8 @@ static nbs_status nbs__cs_offer_slices(const nbs__cs *c, nbs__sink *s, int32_t c
     for (int32_t q0 = rg->q0[r]; q0 < end || (own && q0 == c0);) {
       const bool block = q0 >= c0;
       const int32_t q1 = block ? c0 + lanes : end - q0 > NBS__CS_SLICE ? q0 + NBS__CS_SLICE : end;
-      nbs__cs_ranges one = {1, {q0}, {q1}};
+      nbs__cs_ranges one = {1, {q0}, {q1}, 0, list};
+      one.places = nbs__cs_list(list, 0, q0, block ? c0 : q1);
       const size_t need = block ? (size_t)lanes * (size_t)lanes + NBS__CS_LANES
                                 : (size_t)(one.q1[0] - q0) * (size_t)lanes + NBS__CS_LANES;
       bool room = true;
@@ -1051,7 +1082,8 @@ static nbs_status nbs__cs_offer_slices(const nbs__cs *c, nbs__sink *s, int32_t c
       } else {
         for (int32_t q = q0; q < one.q1[0]; q++) {
           nbs_pair some[NBS__CS_LANES * NBS__CS_LANES + NBS__CS_LANES];
-          nbs__cs_ranges single = {1, {q}, {block ? c0 + lanes : q + 1}};
+          nbs__cs_ranges single = {1, {q}, {block ? c0 + lanes : q + 1}, 0, list};
+          single.places = nbs__cs_list(list, 0, q, block ? c0 : q + 1);
           size_t k = c->block(c, c0, lanes, &single, some);
           for (size_t u = 0; u < k; u++) NBS__TRY(nbs__sink_one(s, some[u]));
           if (block) break;
@@ -1193,11 +1225,13 @@ static int32_t nbs__cs_lower(const uint64_t *key, int32_t hi, uint64_t k) {
  * (3D, N = 1e6, Zen 5: the sweep without the kernel 4.6 ns per element, with the kernel
  * called twice 25.2, once 14.9). Tried and left out: each block's windows found one block
  * ahead, before the kernel of the block before, so that the processor could run the two
- * side by side: no faster (search 14.8-15.1 against 14.9-15.4, interleaved, min of 4). */
+ * side by side: no faster (search 14.8-15.1 against 14.9-15.4, interleaved, min of 4).
+ * Where `listed` (the AVX-512 sweep), the ranges' places are also written to a list as they
+ * are found, which the kernel's steps loop over (nbs__cs_ranges, nbs__cs_list). */
 static inline __attribute__((always_inline)) nbs_status
 nbs__cs_row_blocks(const nbs__cs *c, nbs__sink *s, int32_t row_a, int32_t a, int32_t b,
                    int rows, const uint64_t *base, int32_t *q0, int32_t *q1,
-                   nbs__cs_count_fn below, nbs__cs_count_fn upto) {
+                   nbs__cs_count_fn below, nbs__cs_count_fn upto, bool listed) {
   const int dim = c->dim;
   /* key[q] >> ks is element q's key; a bound b on keys is b << ks on the words (below), or
    * b << ks | low (up to) */
@@ -1207,6 +1241,7 @@ nbs__cs_row_blocks(const nbs__cs *c, nbs__sink *s, int32_t row_a, int32_t a, int
   const uint64_t fine = c->fine;
   nbs_status st = NBS_OK;
   int32_t w = row_a;
+  int32_t list[NBS__CS_SLICE + 16]; /* the block's places, where listed (nbs__cs_ranges) */
   for (int32_t c0 = a; c0 < b && st == NBS_OK; c0 += NBS__CS_LANES) {
     const int lanes = b - c0 < NBS__CS_LANES ? (int)(b - c0) : NBS__CS_LANES;
     /* The sweep's own rows are its one stream of memory not read before: the gather (or
@@ -1227,6 +1262,7 @@ nbs__cs_row_blocks(const nbs__cs *c, nbs__sink *s, int32_t row_a, int32_t a, int
     const uint64_t fa = k0 & mx, fb = (key[c0 + lanes - 1] >> ks) & mx;
     nbs__cs_ranges rg;
     rg.count = 0;
+    int32_t places = 0;
     /* each neighbouring row: a window of fa - fine .. fb + fine (a loop, not unrolled: with
      * 3D's four rows a constant, GCC unrolled it, and the detection was 3-5% slower) */
 #pragma GCC unroll 1
@@ -1244,6 +1280,8 @@ nbs__cs_row_blocks(const nbs__cs *c, nbs__sink *s, int32_t row_a, int32_t a, int
       rg.q0[rg.count] = q0[r];
       rg.q1[rg.count] = q1[r];
       rg.count += q1[r] > q0[r];
+      /* listed here, among the window searches (see the AVX-512 kernel) */
+      if (listed) places = nbs__cs_list(list, places, q0[r], q1[r]);
     }
     /* own row: the elements before the block from fa - fine on (none before a row's first
      * block: no search there, which spares sparse scenes, whose rows hold one element or
@@ -1263,6 +1301,9 @@ nbs__cs_row_blocks(const nbs__cs *c, nbs__sink *s, int32_t row_a, int32_t a, int
       while (l < lanes && ((key[c0 + l] >> ks) & mx) - ((key[c0 + l - 1] >> ks) & mx) > fine) l++;
       if (l == lanes) continue;
     }
+    /* the own row's places before the block; those of the block are its rotations */
+    rg.places = listed ? nbs__cs_list(list, places, w, c0) : -1;
+    rg.list = list;
     st = nbs__cs_offer(c, s, c0, lanes, &rg);
   }
   return st;
@@ -1274,7 +1315,7 @@ nbs__cs_row_blocks(const nbs__cs *c, nbs__sink *s, int32_t row_a, int32_t a, int
  * in key order. */
 static inline __attribute__((always_inline)) nbs_status
 nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
-                    nbs__cs_count_fn below, nbs__cs_count_fn upto) {
+                    nbs__cs_count_fn below, nbs__cs_count_fn upto, bool listed) {
   nbs_status st = NBS_OK;
   const uint64_t *key = c->key;
   const int bx = c->bx, by = c->by, ks = c->ks, kx = bx + ks;
@@ -1339,7 +1380,7 @@ nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
        * than the empty windows */
       if (key[q] >> kx == trow) q0[r] = q1[r] = q;
     }
-    st = nbs__cs_row_blocks(c, s, a0, a, b, 4, base, q0, q1, below, upto);
+    st = nbs__cs_row_blocks(c, s, a0, a, b, 4, base, q0, q1, below, upto, listed);
     lq1 = q0[2] >= 0 ? q1[2] : -1;
     prev_row = row;
     prev_a = a0;
@@ -1368,7 +1409,7 @@ nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
  * counts of an element do not wait on those of the one before. */
 static inline __attribute__((always_inline)) nbs_status
 nbs__cs_sweep2_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
-                    nbs__cs_count_fn below, nbs__cs_count_fn upto) {
+                    nbs__cs_count_fn below, nbs__cs_count_fn upto, bool listed) {
   nbs_status st = NBS_OK;
   const uint64_t *key = c->key;
   const int bx = c->bx, ks = c->ks, kx = bx + ks;
@@ -1406,7 +1447,7 @@ nbs__cs_sweep2_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
                                                 : p;
         q0[0] = q1[0] = q;
       }
-      st = nbs__cs_row_blocks(c, s, a0, p, b, 1, base, q0, q1, below, upto);
+      st = nbs__cs_row_blocks(c, s, a0, p, b, 1, base, q0, q1, below, upto, listed);
       last_row = row;
       last_a = a0;
       p = b;
@@ -1457,6 +1498,7 @@ nbs__cs_sweep2_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
       rg.q0[rg.count] = p - c3;
       rg.q1[rg.count] = p + 1;
       rg.count++;
+      rg.places = -1;
       st = nbs__cs_offer(c, s, p, 1, &rg);
     }
     p++;
@@ -1467,29 +1509,29 @@ nbs__cs_sweep2_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
 /* The sweep of the places [from, to) of the cell order, into `out`: 2D or 3D. */
 static inline __attribute__((always_inline)) nbs_status
 nbs__cs_sweep_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
-                   nbs__cs_count_fn below, nbs__cs_count_fn upto) {
+                   nbs__cs_count_fn below, nbs__cs_count_fn upto, bool listed) {
   nbs__sink local = *out; /* kept in registers, written back at the end */
-  const nbs_status st = c->dim == 2 ? nbs__cs_sweep2_body(c, &local, from, to, below, upto)
-                                    : nbs__cs_sweep3_body(c, &local, from, to, below, upto);
+  const nbs_status st = c->dim == 2 ? nbs__cs_sweep2_body(c, &local, from, to, below, upto, listed)
+                                    : nbs__cs_sweep3_body(c, &local, from, to, below, upto, listed);
   *out = local;
   return st;
 }
 
 /* The sweep, compiled once per kernel: with the plain counters, and for AVX-512 and AVX2
  * with their vector ones (the function pointers are constants, so the compiler inlines
- * them). */
+ * them); for AVX-512, the ranges' places listed (`listed`, see nbs__cs_ranges). */
 static nbs_status nbs__cs_sweep_generic(const nbs__cs *c, nbs__sink *out, int32_t from,
                                         int32_t to) {
-  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below, nbs__cs_upto);
+  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below, nbs__cs_upto, false);
 }
 #if NBS__CS_AVX512
 NBS__CS_AVX512_TARGET NBS__CS_HOT
 static nbs_status nbs__cs_sweep_avx512(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to) {
-  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below512, nbs__cs_upto512);
+  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below512, nbs__cs_upto512, true);
 }
 NBS__CS_AVX2_TARGET
 static nbs_status nbs__cs_sweep_avx2(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to) {
-  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below256, nbs__cs_upto256);
+  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below256, nbs__cs_upto256, false);
 }
 #endif
 
