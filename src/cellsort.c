@@ -38,7 +38,12 @@
  *      of 4,096 places at a time (512 to 32,768 alike) each followed by the sweep of those
  *      places, so that the sweep reads them from L2, not from memory (Zen 5, one thread,
  *      min of 2: 3D N = 1e7 27.4 / 26.4-27.9, 1e6 25.3 / 25.3, 2D 1e6 12.6 / 12.5; the
- *      sweep's time grew by what the gather's fell);
+ *      sweep's time grew by what the gather's fell); nor a gather of each bucket of the radix
+ *      sort's top digit just after the bucket was sorted (the one before it, so that the
+ *      prefetches run on into the bucket just sorted), its coordinates' lines still in the
+ *      cache from the sort's passes, the idx array the buckets' scratch (3D, one thread,
+ *      interleaved, medians of 8 and 3, preparation 7.69 -> 7.57 ns per element at N = 1e6,
+ *      8.98 -> 9.16 at 1e7);
  *      Tried and left out: the same partition with a plain store of each entry to each of
  *      the 5 arrays (word, element and coordinates) of its bucket: it cost more than the
  *      gather and the key pass it replaced (3D, one thread, interleaved, min of 4: N = 1e6
@@ -1101,9 +1106,13 @@ static nbs_status nbs__cs_offer_slices(const nbs__cs *c, nbs__sink *s, int32_t c
  * block (perf: 5.6% of the sweep on the instruction after it). An empty asm that says it
  * may change the sum keeps the loop scalar, each load served by its own store (3D, N = 1e6,
  * interleaved, medians: search 14.5 -> 13.9-14.0 ns per element, time steps 15.1 -> 14.5,
- * 1e7 14.8 -> 14.4, sparse and clustered 0.3 less; 2D the same). Tried and left out: the sum
- * kept by the sweep as it finds the ranges, no loop: 3D, N = 1e6, interleaved, min of 6,
- * 33.7 -> 33.2 ns per element, but the huge domain 38.8 -> 39.7 (2D 24.6 -> 24.2). */
+ * 1e7 14.8 -> 14.4, sparse and clustered 0.3 less; 2D the same). Where the ranges are
+ * listed (nbs__cs_ranges), the list's length is the sum but for the block's own lanes, and
+ * there is no loop (interleaved with the loop, medians of 4-5, search ns per element, the
+ * same bytes: 3D N = 1e6 12.41 -> 12.07 and 12.25 -> 11.95, 1e4 11.12 -> 10.61, sparse
+ * 12.70 -> 12.26, huge 17.37 -> 17.06; 2D 1e6 5.15 -> 4.97). (Kept by the sweep as it
+ * found the ranges, before they were listed, such a sum had cost the huge domain more than
+ * it saved: 3D, N = 1e6, min of 6, 33.7 -> 33.2 ns per element, huge 38.8 -> 39.7.) */
 #if defined(__GNUC__)
 #define NBS__CS_SCALAR(v) __asm__("" : "+r"(v))
 #else
@@ -1112,9 +1121,13 @@ static nbs_status nbs__cs_offer_slices(const nbs__cs *c, nbs__sink *s, int32_t c
 static inline __attribute__((always_inline)) nbs_status
 nbs__cs_offer(const nbs__cs *c, nbs__sink *s, int32_t c0, int lanes, const nbs__cs_ranges *rg) {
   size_t total = 0;
-  for (int r = 0; r < rg->count; r++) {
-    total += (size_t)(rg->q1[r] - rg->q0[r]);
-    NBS__CS_SCALAR(total);
+  if (rg->places >= 0) {
+    total = (size_t)rg->places + (size_t)lanes;
+  } else {
+    for (int r = 0; r < rg->count; r++) {
+      total += (size_t)(rg->q1[r] - rg->q0[r]);
+      NBS__CS_SCALAR(total);
+    }
   }
   /* the block's own pairs are counted as lanes (lanes - 1) / 2, not lanes * lanes */
   s->candidates += (uint64_t)lanes * total - (uint64_t)lanes * (uint64_t)(lanes + 1) / 2;
