@@ -695,7 +695,10 @@ static size_t nbs__cs_block_generic(const nbs__cs *c, int32_t c0, int lanes,
  * 33.6 -> 35.1 (19.1 -> 20.7). The sums moved from the adders to the multipliers as
  * fma(a, 1, b), which rounds as a + b does: 33.4 -> 34.0, and the z difference with them
  * 34.8: the adders are not what bounds the steps. The kernel called directly from the sweep
- * compiled for it (a constant, inlined, not a pointer): 33.2 / 33.4. */
+ * compiled for it (a constant, inlined, not a pointer): 33.2 / 33.4; again after the
+ * ranges were listed by the sweep (0c29dd2; one form, 3D without radii, inlined into the
+ * AVX-512 sweep; interleaved, medians of 5, search ns per element): 11.94 -> 11.61, but the
+ * huge domain 16.75 -> 17.26 and sparse 12.29 -> 12.34, for a copy of the sweep per form. */
 /* Where the SIMD kernels read q's element, a constant of each of their copies: the idx
  * array (unpacked keys), the low half of a packed word that is the element alone (imask
  * all ones), or one whose low bits hold the element under the key's (ANDed with imask).
@@ -807,7 +810,8 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int 
    * own row's, about half (12.83 -> 12.50), but nothing lost in huge (16.71 -> 16.86);
    * against it, written range by range: 3D 1e6 12.41 -> 11.98, sparse 12.71 -> 12.41, huge
    * 16.12 -> 16.73. The AVX2 kernel, whose step is two halves, keeps a loop per range: with the list
-   * its search took 18.90 -> 20.70 (3D 1e6) and 7.06 -> 9.18 (2D), NBS_SIMD=avx2 (and with
+   * (NBS_SIMD=avx2, interleaved, medians of 4) its search took 18.98 -> 18.77 at 3D 1e6 but
+   * 14.75 -> 16.14 at 1e4 and 17.20 -> 17.76 in huge, and 2D 7.14 -> 9.14 (and with
    * the list written by the kernel, mixed: 3D 1e6 20.71 -> 21.52, 1e4 with decoys 20.65 ->
    * 19.49).
    * What the exits cost, measured on 585a76a and ff1b1cf by running each of the
