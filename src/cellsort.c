@@ -701,13 +701,49 @@ static size_t nbs__cs_block_generic(const nbs__cs *c, int32_t c0, int lanes,
  * huge domain 16.75 -> 17.26 and sparse 12.29 -> 12.34, for a copy of the sweep per form. */
 /* Where the SIMD kernels read q's element, a constant of each of their copies: the idx
  * array (unpacked keys), the low half of a packed word that is the element alone (imask
- * all ones), or one whose low bits hold the element under the key's (ANDed with imask).
- * NBS__CS_FORMS calls the copy of c's form. */
+ * all ones), or one whose low bits hold the element under the key's (ANDed with imask). */
 enum { NBS__CS_IDX, NBS__CS_WHOLE, NBS__CS_MASKED };
-#define NBS__CS_FORMS(body, c, ...)                                                            \
-  ((c)->istep == 1            ? NBS__CS_DISPATCH(body, c, NBS__CS_IDX, __VA_ARGS__)            \
-   : (c)->imask == UINT32_MAX ? NBS__CS_DISPATCH(body, c, NBS__CS_WHOLE, __VA_ARGS__)          \
-                              : NBS__CS_DISPATCH(body, c, NBS__CS_MASKED, __VA_ARGS__))
+/* A SIMD kernel's copies: NBS__CS_VARIANTS(pre, attributes, body) makes one function of the
+ * body for each form, dimension, radii or not, and contacts or candidates, pre_FORM_dim_
+ * radii_contacts, and their table pre_table[form][3D][radii][contacts]; nbs__cs_kernel_of
+ * chooses c's once per detection (c->block). Where one function held all 24 copies and
+ * chose one at every call, the call saved the choice's branches and half its register
+ * saves (3D, N = 1e6, interleaved, medians of 5-8, search in ns per element, the same
+ * bytes: 11.83 -> 11.62 and 11.98 -> 11.71; 1e7 12.34 -> 12.12; 1e4 10.52 -> 10.33; sparse
+ * 12.09 -> 11.92; clustered 12.05 -> 11.98; huge 16.83 -> 16.97; 2D 4.83 -> 4.75; the
+ * AVX2 kernel's, NBS_SIMD=avx2, mixed: 3D 1e6 19.44 -> 19.85 and 19.63 -> 19.96, 1e4
+ * 15.18 -> 14.79, 2D 7.23 -> 7.14). */
+#define NBS__CS_VARIANT(pre, attr, body, form, dim, radii, contacts)                           \
+  attr static size_t pre##_##form##_##dim##_##radii##_##contacts(                             \
+      const nbs__cs *c, int32_t c0, int lanes, const nbs__cs_ranges *rg, nbs_pair *out) {     \
+    return body(c, dim, radii, contacts, NBS__CS_##form, c0, lanes, rg, out);                 \
+  }
+#define NBS__CS_VARIANTS_OF(pre, attr, body, form)                                             \
+  NBS__CS_VARIANT(pre, attr, body, form, 2, 0, 0)                                              \
+  NBS__CS_VARIANT(pre, attr, body, form, 2, 0, 1)                                              \
+  NBS__CS_VARIANT(pre, attr, body, form, 2, 1, 0)                                              \
+  NBS__CS_VARIANT(pre, attr, body, form, 2, 1, 1)                                              \
+  NBS__CS_VARIANT(pre, attr, body, form, 3, 0, 0)                                              \
+  NBS__CS_VARIANT(pre, attr, body, form, 3, 0, 1)                                              \
+  NBS__CS_VARIANT(pre, attr, body, form, 3, 1, 0)                                              \
+  NBS__CS_VARIANT(pre, attr, body, form, 3, 1, 1)
+#define NBS__CS_VARIANTS_ROW(pre, form)                                                        \
+  {{{pre##_##form##_2_0_0, pre##_##form##_2_0_1}, {pre##_##form##_2_1_0, pre##_##form##_2_1_1}}, \
+   {{pre##_##form##_3_0_0, pre##_##form##_3_0_1}, {pre##_##form##_3_1_0, pre##_##form##_3_1_1}}}
+#define NBS__CS_VARIANTS(pre, attr, body)                                                      \
+  NBS__CS_VARIANTS_OF(pre, attr, body, IDX)                                                    \
+  NBS__CS_VARIANTS_OF(pre, attr, body, WHOLE)                                                  \
+  NBS__CS_VARIANTS_OF(pre, attr, body, MASKED)                                                 \
+  static const nbs__cs_block_fn pre##_table[3][2][2][2] = {                                    \
+      NBS__CS_VARIANTS_ROW(pre, IDX), NBS__CS_VARIANTS_ROW(pre, WHOLE),                        \
+      NBS__CS_VARIANTS_ROW(pre, MASKED)};
+static nbs__cs_block_fn nbs__cs_kernel_of(const nbs__cs_block_fn table[3][2][2][2],
+                                          const nbs__cs *c) {
+  const int form = c->istep == 1             ? NBS__CS_IDX
+                   : c->imask == UINT32_MAX ? NBS__CS_WHOLE
+                                            : NBS__CS_MASKED;
+  return table[form][c->dim == 3][c->rs != NULL][c->contacts];
+}
 static inline __attribute__((always_inline)) NBS__CS_AVX512_TARGET size_t
 nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int form,
                       int32_t c0, int lanes, const nbs__cs_ranges *rg, nbs_pair *out) {
@@ -892,11 +928,7 @@ nbs__cs_block512_body(const nbs__cs *c, int dim, bool radii, bool contacts, int 
   return (size_t)(o - out);
 }
 
-NBS__CS_AVX512_TARGET NBS__CS_PLACED
-static size_t nbs__cs_block_avx512(const nbs__cs *c, int32_t c0, int lanes,
-                                   const nbs__cs_ranges *rg, nbs_pair *out) {
-  return NBS__CS_FORMS(nbs__cs_block512_body, c, c0, lanes, rg, out);
-}
+NBS__CS_VARIANTS(nbs__cs_k512, NBS__CS_AVX512_TARGET NBS__CS_PLACED, nbs__cs_block512_body)
 
 /* The AVX2 kernel, for processors without AVX-512: the block's 8 lanes in two registers of
  * 4 per coordinate, the same steps as the AVX-512 kernel, and the pairs that pass packed
@@ -904,7 +936,10 @@ static size_t nbs__cs_block_avx512(const nbs__cs *c, int32_t c0, int lanes,
  * the same order as the other kernels: for each q, lanes 0-3 then 4-7; then the rotations,
  * whose partner lanes are read from the block stored twice over (lane l + k at l + k).
  * (The AVX-512 kernel's AND after a broadcast load of q's number was slower here: 3D,
- * N = 1e6, NBS_SIMD=avx2, 41.1 -> 42.1 ns per element.) The packing permutations
+ * N = 1e6, NBS_SIMD=avx2, 41.1 -> 42.1 ns per element.) The three forms of q's element and
+ * the pairs' place a pointer, as for the AVX-512 kernel: with NBS_SIMD=avx2, 3D N = 1e6,
+ * interleaved with 8851642, medians of 6, search 20.66 -> 19.94 ns per element; 2D 7.79 ->
+ * 7.31. The packing permutations
  * (nbs__pack4, internal.h) serve NBS's AVX2 test too. */
 const int32_t nbs__pack4[16][8] = {
     {0, 0, 0, 0, 0, 0, 0, 0}, {0, 1, 0, 0, 0, 0, 0, 0}, {2, 3, 0, 0, 0, 0, 0, 0},
@@ -1011,14 +1046,7 @@ nbs__cs_block256_body(const nbs__cs *c, int dim, bool radii, bool contacts, int 
   return (size_t)(o - out);
 }
 
-NBS__CS_AVX2_TARGET
-static size_t nbs__cs_block_avx2(const nbs__cs *c, int32_t c0, int lanes,
-                                 const nbs__cs_ranges *rg, nbs_pair *out) {
-  /* the three forms of q's element, as for the AVX-512 kernel (and the pairs' place a
-   * pointer): with NBS_SIMD=avx2 on the benchmark machine, 3D N = 1e6, interleaved with
-   * 8851642, medians of 6, search 20.66 -> 19.94 ns per element; 2D 7.79 -> 7.31 */
-  return NBS__CS_FORMS(nbs__cs_block256_body, c, c0, lanes, rg, out);
-}
+NBS__CS_VARIANTS(nbs__cs_k256, NBS__CS_AVX2_TARGET, nbs__cs_block256_body)
 #endif
 
 /* The kernel this process uses: AVX-512 where the processor has it, else AVX2, else the
@@ -3570,10 +3598,6 @@ nbs_status nbs__cellsort(nbs__run *run) {
   c.d2 = run->d2;
   c.contacts = run->mode == NBS_MODE_CONTACTS;
   c.block = nbs__cs_block_generic;
-#if NBS__CS_AVX512
-  if (ctx->simd == NBS__SIMD_AVX512) c.block = nbs__cs_block_avx512;
-  if (ctx->simd == NBS__SIMD_AVX2) c.block = nbs__cs_block_avx2;
-#endif
   c.nx = nx;
   c.ny = ny;
   c.nz = nz;
@@ -3582,6 +3606,11 @@ nbs_status nbs__cellsort(nbs__run *run) {
   c.fine = (uint64_t)1 << fine_bits;
   c.ks = packed ? eb : 0;
   c.imask = packed ? (uint32_t)(((uint64_t)1 << eb) - 1) : UINT32_MAX;
+#if NBS__CS_AVX512
+  /* the SIMD kernel's copy for c (the form needs imask) */
+  if (ctx->simd == NBS__SIMD_AVX512) c.block = nbs__cs_kernel_of(nbs__cs_k512_table, &c);
+  if (ctx->simd == NBS__SIMD_AVX2) c.block = nbs__cs_kernel_of(nbs__cs_k256_table, &c);
+#endif
   run->work_bytes = bytes;
 
   const nbs__cs_keying kg = nbs__cs_keying_of(&plan, dim);
