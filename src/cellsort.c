@@ -580,8 +580,15 @@ struct nbs__cs_ranges {
   const int32_t *list; /* where places >= 0 */
 };
 /* Sixteen places, as GCC's vector extension (no target needed: only the AVX-512 sweep
- * lists, and there it is one add and one store). */
-typedef int32_t nbs__cs_v16i __attribute__((vector_size(64)));
+ * lists, and there it is one add and one store). Unsigned lanes (places are below 2^31, so
+ * the same values): with signed lanes, GCC 12's check of each lane's add for signed
+ * overflow, in the sanitizer build (-fsanitize=address,undefined -fno-sanitize-recover=all,
+ * -O2), wrote wrong places to the list, and cellsort with the AVX-512 kernel found wrong
+ * contacts there, 14 of the sanitizer suite's 25 tests failing (CI; the same build with
+ * -fno-sanitize=signed-integer-overflow, or with unsigned lanes, passes). Unsigned adds are
+ * not checked; in the Release build the AVX-512 sweep's code is the same, instruction for
+ * instruction. */
+typedef uint32_t nbs__cs_v16i __attribute__((vector_size(64)));
 /* Appends the places [q0, q1) to the list of t (q1 >= q0; returns t + q1 - q0), written
  * sixteen at a time: up to 15 past the last, where the list has room for them. A list of
  * more than NBS__CS_SLICE places is not used (nbs__cs_offer slices its ranges), so nothing
@@ -590,10 +597,10 @@ static inline __attribute__((always_inline)) int32_t nbs__cs_list(int32_t *list,
                                                                   int32_t q0, int32_t q1) {
   if (__builtin_expect(t <= NBS__CS_SLICE, 1)) {
     const nbs__cs_v16i iota = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15};
-    nbs__cs_v16i v = iota + q0;
+    nbs__cs_v16i v = iota + (uint32_t)q0;
     __builtin_memcpy(list + t, &v, sizeof v);
     for (int32_t k = 16; __builtin_expect(k < q1 - q0, 0) && t + k <= NBS__CS_SLICE; k += 16) {
-      v += 16;
+      v += 16u;
       __builtin_memcpy(list + t + k, &v, sizeof v);
     }
   }
