@@ -506,7 +506,13 @@ static void nbs__radix_local(uint64_t *a, uint64_t *out, uint64_t *other, int32_
  * branches cost more than the two passes); and the top digit always 9 bits wide, the bits
  * below it split evenly (3D N = 1e6, 24 bits: 512 buckets of about 2,000 keys, in L1,
  * instead of 256 of 3,900; 2D 25 bits: 512 instead of 128 buckets, whose 7,800 keys do not
- * fit L1): no faster (interleaved, min of 6, 33.2 / 33.3 and 19.6 / 19.5). */
+ * fit L1): no faster (interleaved, min of 6, 33.2 / 33.3 and 19.6 / 19.5). Again on Zen 5
+ * (73edad2), the top digit the widest, the digits below it bits / passes rounded down (2D
+ * N = 1e6, 25 bits: 9 + 8 + 8, 313 buckets used of 3,200 keys, where 9 + 9 + 7 uses 79 of
+ * 12,700; 3D 24 bits unchanged): 2D random order preparation 6.66 -> 6.00 ns per element
+ * (a scatter into 79 streams of memory measured 2.0 ns per key against 1.2 into 158 in a
+ * test program), but in cell order 4.54 -> 4.89, the top digit's scatter 4.8% -> 7.6% of the
+ * detection (perf), for reasons not found (interleaved, medians of 4). */
 static void nbs__radix(uint64_t *sk, int32_t *si, uint64_t *dk, int32_t *di, uint64_t *out_k,
                        int32_t *out_i, int32_t n, int low, nbs__digits dg, uint32_t *hist,
                        int threads, uint64_t *scratch, size_t scratch_words) {
