@@ -509,10 +509,15 @@ static void nbs__radix_local(uint64_t *a, uint64_t *out, uint64_t *other, int32_
  * fit L1): no faster (interleaved, min of 6, 33.2 / 33.3 and 19.6 / 19.5). Again on Zen 5
  * (73edad2), the top digit the widest, the digits below it bits / passes rounded down (2D
  * N = 1e6, 25 bits: 9 + 8 + 8, 313 buckets used of 3,200 keys, where 9 + 9 + 7 uses 79 of
- * 12,700; 3D 24 bits unchanged): 2D random order preparation 6.66 -> 6.00 ns per element
- * (a scatter into 79 streams of memory measured 2.0 ns per key against 1.2 into 158 in a
- * test program), but in cell order 4.54 -> 4.89, the top digit's scatter 4.8% -> 7.6% of the
- * detection (perf), for reasons not found (interleaved, medians of 4). */
+ * 12,700; 3D 24 bits unchanged): 2D random order preparation 6.66 -> 6.00 ns per element,
+ * but in cell order 4.54 -> 4.89 (interleaved, medians of 4). Timed inside the sort (best of
+ * 30 detections): random order, the top digit's pass 2.42 -> 1.45 ns per element, the
+ * buckets' 1.66 -> 1.65; in cell order the top digit's scatter 0.60 -> 0.83, for reasons not
+ * found. The random-order gain is this processor's: a test program scattering random digits
+ * into B streams, caches cleared before each pass, took 0.9 ns per word at B = 16, 1.1 at
+ * 32, 2.3-2.8 at 48 to 79, 1.2 at 96 and 0.8-1.2 from 128 to 512. A split chosen by the
+ * input (the count pass can count the wider digit and how often it changes from one word to
+ * the next, and the narrower digit's counts are sums of its) would take both. */
 static void nbs__radix(uint64_t *sk, int32_t *si, uint64_t *dk, int32_t *di, uint64_t *out_k,
                        int32_t *out_i, int32_t n, int low, nbs__digits dg, uint32_t *hist,
                        int threads, uint64_t *scratch, size_t scratch_words) {
