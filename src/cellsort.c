@@ -271,10 +271,11 @@ static int nbs__bits(uint64_t count) {
 typedef struct nbs__digits {
   int passes, width;
   size_t buckets;
+  int bits; /* the key's significant bits: at most passes * width */
 } nbs__digits;
 
 static nbs__digits nbs__radix_digits(int bits) {
-  nbs__digits d = {0, 0, 1};
+  nbs__digits d = {0, 0, 1, bits > 0 ? bits : 0};
   if (bits > 0) {
     d.passes = (bits + NBS__RADIX_BITS - 1) / NBS__RADIX_BITS;
     d.width = (bits + d.passes - 1) / d.passes;
@@ -372,13 +373,9 @@ static bool nbs__radix_top_first(int32_t n, nbs__digits dg) {
  * dk (and di). With several threads each takes a contiguous part of the input and scatters
  * it after the parts of the threads before it, bucket by bucket: the pass stays stable, so
  * its result is the same for any number of threads. A digit shared by every key moves
- * nothing: the pass is skipped and false returned. When `top` is not NULL, the pass is the
- * sort's first one, on its top digit (nbs__radix): top[b] receives where bucket b starts
- * (top[buckets] = n), and the pass is skipped, false returned, when a bucket holds more
- * than NBS__RADIX_LOCAL_MAX keys. */
+ * nothing: the pass is skipped and false returned. */
 static bool nbs__radix_pass(const uint64_t *sk, const int32_t *si, uint64_t *dk, int32_t *di,
-                            int32_t n, int shift, nbs__digits dg, uint32_t *hist, int threads,
-                            uint32_t *top) {
+                            int32_t n, int shift, nbs__digits dg, uint32_t *hist, int threads) {
   const size_t buckets = dg.buckets;
 #if defined(_OPENMP)
 #pragma omp parallel num_threads(threads) if (threads > 1)
@@ -391,14 +388,102 @@ static bool nbs__radix_pass(const uint64_t *sk, const int32_t *si, uint64_t *dk,
   uint64_t same = 0;
   for (int t = 0; t < threads; t++) same += hist[(size_t)t * buckets + d0];
   if (same == (uint64_t)n) return false;
-  const uint32_t most = nbs__radix_offsets(hist, buckets, threads, top);
-  if (top && most > NBS__RADIX_LOCAL_MAX) return false;
+  nbs__radix_offsets(hist, buckets, threads, NULL);
 #if defined(_OPENMP)
 #pragma omp parallel num_threads(threads) if (threads > 1)
 #endif
   NBS__PARTS(t, threads) {
     nbs__radix_scatter(sk, si, dk, di, nbs__chunk(n, t, threads),
                        nbs__chunk(n, t + 1, threads), shift, dg, hist + (size_t)t * buckets);
+  }
+  return true;
+}
+
+/* The first pass of the sort by the top digit first (nbs__radix), which also chooses where
+ * the top digit starts: at dg's digits, all as wide, the top one whatever bits are left (2D
+ * N = 1e6: 25 bits, 9 + 9 + 7), or, where bits / passes rounded down leaves a top digit no
+ * wider than dg's, that many bits for each digit below it and the rest on top (9 + 8 + 8
+ * there): more buckets for this pass, and smaller ones for the passes in cache. The words'
+ * wider top digit is counted (the narrower one's counts are sums of its), and how often it
+ * changes from one word to the next, on pairs NBS__RADIX_PAIRS apart: the wider digit is
+ * taken where at least half the pairs change (not in cell order) and there are at least
+ * NBS__RADIX_WIDE_MIN words (beyond the L2 cache). Why (2D, N = 1e6, timed inside the sort,
+ * best of 30 detections): in random order this pass took 2.42 ns per element with 79 buckets
+ * filled, 1.45 with 313, the buckets' passes the same (1.66, 1.65); in cell order its scatter
+ * took 0.60 with 79 and 0.83 with 313, for reasons not found, and at N = 3e4 in random order
+ * (in cache) the wider digit cost the preparation 0.25 ns (2.93 -> 3.18). The random-order
+ * gain is this processor's (Zen 5): a test program scattering random digits into B streams,
+ * caches cleared before each pass, took 0.9 ns per word at B = 16, 1.1 at 32, 2.3-2.8 at 48
+ * to 79, 1.2 at 96 and 0.8-1.2 from 128 to 512. Returns false, having moved nothing, where
+ * every word has the same top digit or a bucket holds more than NBS__RADIX_LOCAL_MAX; else
+ * top[b] is where bucket b starts (top[buckets] = n), *td the top digit and *lo the digits
+ * below it. */
+#define NBS__RADIX_PAIRS 64
+#define NBS__RADIX_WIDE_MIN ((int32_t)1 << 19)
+static bool nbs__radix_top(const uint64_t *sk, uint64_t *dk, int32_t n, int low,
+                           nbs__digits dg, uint32_t *hist, int threads, uint32_t *top,
+                           nbs__digits *lo, nbs__digits *td) {
+  *lo = dg;
+  const int lw = dg.bits / dg.passes;
+  const bool choice = n >= NBS__RADIX_WIDE_MIN && lw < dg.width &&
+                      dg.bits - (dg.passes - 1) * lw <= dg.width;
+  if (choice) lo->width = lw;
+  int shift = low + (dg.passes - 1) * lo->width;
+  *td = (nbs__digits){1, dg.bits - (dg.passes - 1) * lo->width, 0, 0};
+  td->buckets = (size_t)1 << td->width;
+  uint64_t changes[NBS__THREADS_MAX];
+#if defined(_OPENMP)
+#pragma omp parallel num_threads(threads) if (threads > 1)
+#endif
+  NBS__PARTS(t, threads) {
+    const int32_t from = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
+    nbs__radix_count_ways(sk, from, to, shift, *td, hist + (size_t)t * td->buckets);
+    uint64_t ch = 0;
+    if (choice) {
+      const uint64_t mask = td->buckets - 1;
+      for (int32_t k = from; k + 1 < to; k += NBS__RADIX_PAIRS) {
+        ch += ((sk[k] ^ sk[k + 1]) >> shift & mask) != 0;
+      }
+    }
+    changes[t] = ch;
+  }
+  if (choice) {
+    uint64_t ch = 0;
+    for (int t = 0; t < threads; t++) ch += changes[t];
+    if (ch < (uint64_t)n / NBS__RADIX_PAIRS / 2) {
+      /* in cell order, or nearly: dg's digits; each thread's counts summed into the
+       * narrower digit's, at its place for those */
+      const int r = (dg.passes - 1) * (dg.width - lw);
+      const size_t nb = (size_t)1 << (dg.bits - (dg.passes - 1) * dg.width);
+      for (int t = 0; t < threads; t++) {
+        uint32_t sum[(size_t)1 << NBS__RADIX_BITS];
+        const uint32_t *h = hist + (size_t)t * td->buckets;
+        for (size_t b = 0; b < nb; b++) {
+          uint32_t c = 0;
+          for (size_t i = b << r; i < (b + 1) << r; i++) c += h[i];
+          sum[b] = c;
+        }
+        memcpy(hist + (size_t)t * nb, sum, nb * sizeof *sum);
+      }
+      lo->width = dg.width;
+      shift = low + (dg.passes - 1) * dg.width;
+      *td = (nbs__digits){1, dg.bits - (dg.passes - 1) * dg.width, nb, 0};
+    }
+  }
+  lo->buckets = (size_t)1 << lo->width;
+  td->bits = td->width;
+  const size_t buckets = td->buckets;
+  const uint64_t d0 = (sk[0] >> shift) & (buckets - 1);
+  uint64_t same = 0;
+  for (int t = 0; t < threads; t++) same += hist[(size_t)t * buckets + d0];
+  if (same == (uint64_t)n) return false;
+  if (nbs__radix_offsets(hist, buckets, threads, top) > NBS__RADIX_LOCAL_MAX) return false;
+#if defined(_OPENMP)
+#pragma omp parallel num_threads(threads) if (threads > 1)
+#endif
+  NBS__PARTS(t, threads) {
+    nbs__radix_scatter(sk, NULL, dk, NULL, nbs__chunk(n, t, threads),
+                       nbs__chunk(n, t + 1, threads), shift, *td, hist + (size_t)t * buckets);
   }
   return true;
 }
@@ -506,28 +591,18 @@ static void nbs__radix_local(uint64_t *a, uint64_t *out, uint64_t *other, int32_
  * branches cost more than the two passes); and the top digit always 9 bits wide, the bits
  * below it split evenly (3D N = 1e6, 24 bits: 512 buckets of about 2,000 keys, in L1,
  * instead of 256 of 3,900; 2D 25 bits: 512 instead of 128 buckets, whose 7,800 keys do not
- * fit L1): no faster (interleaved, min of 6, 33.2 / 33.3 and 19.6 / 19.5). Again on Zen 5
- * (73edad2), the top digit the widest, the digits below it bits / passes rounded down (2D
- * N = 1e6, 25 bits: 9 + 8 + 8, 313 buckets used of 3,200 keys, where 9 + 9 + 7 uses 79 of
- * 12,700; 3D 24 bits unchanged): 2D random order preparation 6.66 -> 6.00 ns per element,
- * but in cell order 4.54 -> 4.89 (interleaved, medians of 4). Timed inside the sort (best of
- * 30 detections): random order, the top digit's pass 2.42 -> 1.45 ns per element, the
- * buckets' 1.66 -> 1.65; in cell order the top digit's scatter 0.60 -> 0.83, for reasons not
- * found. The random-order gain is this processor's: a test program scattering random digits
- * into B streams, caches cleared before each pass, took 0.9 ns per word at B = 16, 1.1 at
- * 32, 2.3-2.8 at 48 to 79, 1.2 at 96 and 0.8-1.2 from 128 to 512. A split chosen by the
- * input (the count pass can count the wider digit and how often it changes from one word to
- * the next, and the narrower digit's counts are sums of its) would take both. */
+ * fit L1): no faster (interleaved, min of 6, 33.2 / 33.3 and 19.6 / 19.5). On Zen 5 the
+ * top digit is the widest where the input is not in cell order (nbs__radix_top). */
 static void nbs__radix(uint64_t *sk, int32_t *si, uint64_t *dk, int32_t *di, uint64_t *out_k,
                        int32_t *out_i, int32_t n, int low, nbs__digits dg, uint32_t *hist,
                        int threads, uint64_t *scratch, size_t scratch_words) {
   if (!si && nbs__radix_top_first(n, dg)) {
     uint32_t top[((size_t)1 << NBS__RADIX_BITS) + 1];
-    const int shift = low + (dg.passes - 1) * dg.width;
-    if (nbs__radix_pass(sk, si, dk, di, n, shift, dg, hist, threads, top)) {
+    nbs__digits lo, td; /* the digits below the top one, and the top one */
+    if (nbs__radix_top(sk, dk, n, low, dg, hist, threads, top, &lo, &td)) {
       /* a scratch of the largest bucket for each thread, where there is room for it */
       uint32_t most = 0;
-      for (size_t b = 0; b < dg.buckets; b++) {
+      for (size_t b = 0; b < td.buckets; b++) {
         if (top[b + 1] - top[b] > most) most = top[b + 1] - top[b];
       }
       if ((size_t)threads * most > scratch_words) scratch = NULL;
@@ -538,13 +613,13 @@ static void nbs__radix(uint64_t *sk, int32_t *si, uint64_t *dk, int32_t *di, uin
       NBS__PARTS(t, threads) {
         const uint32_t from = (uint32_t)nbs__chunk(n, t, threads);
         const uint32_t to = (uint32_t)nbs__chunk(n, t + 1, threads);
-        uint32_t *h = hist + (size_t)t * dg.buckets;
+        uint32_t *h = hist + (size_t)t * lo.buckets;
         uint64_t *mine = scratch ? scratch + (size_t)t * most : NULL;
-        for (size_t b = 0; b < dg.buckets; b++) {
+        for (size_t b = 0; b < td.buckets; b++) {
           if (top[b] < from || top[b] >= to || top[b + 1] == top[b]) continue;
           const uint32_t s0 = top[b];
           uint64_t *other = mine ? mine : dk == out_k ? sk + s0 : dk + s0;
-          nbs__radix_local(dk + s0, out_k + s0, other, (int32_t)(top[b + 1] - s0), low, dg, h);
+          nbs__radix_local(dk + s0, out_k + s0, other, (int32_t)(top[b + 1] - s0), low, lo, h);
         }
       }
       return;
@@ -552,7 +627,7 @@ static void nbs__radix(uint64_t *sk, int32_t *si, uint64_t *dk, int32_t *di, uin
     /* nothing moved: one bucket holds every key, or one bucket too many */
   }
   for (int p = 0; p < dg.passes; p++) {
-    if (!nbs__radix_pass(sk, si, dk, di, n, low + p * dg.width, dg, hist, threads, NULL)) {
+    if (!nbs__radix_pass(sk, si, dk, di, n, low + p * dg.width, dg, hist, threads)) {
       continue;
     }
     uint64_t *tswap = sk;
