@@ -369,26 +369,25 @@ static bool nbs__radix_top_first(int32_t n, nbs__digits dg) {
   return dg.passes >= 2 && (uint64_t)n >= (uint64_t)dg.buckets * dg.buckets;
 }
 
-/* One stable counting pass of the digit at `shift` (dg's width) over n keys, sk (and si) to
- * dk (and di). With several threads each takes a contiguous part of the input and scatters
- * it after the parts of the threads before it, bucket by bucket: the pass stays stable, so
- * its result is the same for any number of threads. A digit shared by every key moves
- * nothing: the pass is skipped and false returned. */
-static bool nbs__radix_pass(const uint64_t *sk, const int32_t *si, uint64_t *dk, int32_t *di,
-                            int32_t n, int shift, nbs__digits dg, uint32_t *hist, int threads) {
+/* The second half of a stable counting pass of the digit at `shift` (dg's width) over n keys,
+ * sk (and si) to dk (and di), once hist holds each thread's counts (thread t's at
+ * t * buckets, of its contiguous part of the input): each thread scatters its part after the
+ * parts of the threads before it, bucket by bucket, so that the pass stays stable and its
+ * result is the same for any number of threads. A digit shared by every key moves nothing:
+ * the pass is skipped and false returned. When `top` is not NULL, the pass is the sort's
+ * first one, on its top digit (nbs__radix_top): top[b] receives where bucket b starts
+ * (top[buckets] = n), and the pass is skipped, false returned, when a bucket holds more than
+ * NBS__RADIX_LOCAL_MAX keys. */
+static bool nbs__radix_place(const uint64_t *sk, const int32_t *si, uint64_t *dk, int32_t *di,
+                             int32_t n, int shift, nbs__digits dg, uint32_t *hist, int threads,
+                             uint32_t *top) {
   const size_t buckets = dg.buckets;
-#if defined(_OPENMP)
-#pragma omp parallel num_threads(threads) if (threads > 1)
-#endif
-  NBS__PARTS(t, threads) {
-    nbs__radix_count_ways(sk, nbs__chunk(n, t, threads), nbs__chunk(n, t + 1, threads), shift,
-                          dg, hist + (size_t)t * buckets);
-  }
   const uint64_t d0 = (sk[0] >> shift) & (buckets - 1);
   uint64_t same = 0;
   for (int t = 0; t < threads; t++) same += hist[(size_t)t * buckets + d0];
   if (same == (uint64_t)n) return false;
-  nbs__radix_offsets(hist, buckets, threads, NULL);
+  const uint32_t most = nbs__radix_offsets(hist, buckets, threads, top);
+  if (top && most > NBS__RADIX_LOCAL_MAX) return false;
 #if defined(_OPENMP)
 #pragma omp parallel num_threads(threads) if (threads > 1)
 #endif
@@ -397,6 +396,25 @@ static bool nbs__radix_pass(const uint64_t *sk, const int32_t *si, uint64_t *dk,
                        nbs__chunk(n, t + 1, threads), shift, dg, hist + (size_t)t * buckets);
   }
   return true;
+}
+
+/* One stable counting pass of the digit at `shift` (dg's width) over n keys: the counts of
+ * each thread's part, then nbs__radix_place (without `top`). */
+static bool nbs__radix_pass(const uint64_t *sk, const int32_t *si, uint64_t *dk, int32_t *di,
+                            int32_t n, int shift, nbs__digits dg, uint32_t *hist, int threads) {
+#if defined(_OPENMP)
+#pragma omp parallel num_threads(threads) if (threads > 1)
+#endif
+  NBS__PARTS(t, threads) {
+    nbs__radix_count_ways(sk, nbs__chunk(n, t, threads), nbs__chunk(n, t + 1, threads), shift,
+                          dg, hist + (size_t)t * dg.buckets);
+  }
+  return nbs__radix_place(sk, si, dk, di, n, shift, dg, hist, threads, NULL);
+}
+
+/* One digit of `width` bits, for a single pass. */
+static nbs__digits nbs__radix_digit(int width) {
+  return (nbs__digits){1, width, (size_t)1 << width, width};
 }
 
 /* The first pass of the sort by the top digit first (nbs__radix), which also chooses where
@@ -428,9 +446,8 @@ static bool nbs__radix_top(const uint64_t *sk, uint64_t *dk, int32_t n, int low,
   const bool choice = n >= NBS__RADIX_WIDE_MIN && lw < dg.width &&
                       dg.bits - (dg.passes - 1) * lw <= dg.width;
   if (choice) lo->width = lw;
+  *td = nbs__radix_digit(dg.bits - (dg.passes - 1) * lo->width);
   int shift = low + (dg.passes - 1) * lo->width;
-  *td = (nbs__digits){1, dg.bits - (dg.passes - 1) * lo->width, 0, 0};
-  td->buckets = (size_t)1 << td->width;
   uint64_t changes[NBS__THREADS_MAX];
 #if defined(_OPENMP)
 #pragma omp parallel num_threads(threads) if (threads > 1)
@@ -447,45 +464,29 @@ static bool nbs__radix_top(const uint64_t *sk, uint64_t *dk, int32_t n, int low,
     }
     changes[t] = ch;
   }
-  if (choice) {
-    uint64_t ch = 0;
-    for (int t = 0; t < threads; t++) ch += changes[t];
-    if (ch < (uint64_t)n / NBS__RADIX_PAIRS / 2) {
-      /* in cell order, or nearly: dg's digits; each thread's counts summed into the
-       * narrower digit's, at its place for those */
-      const int r = (dg.passes - 1) * (dg.width - lw);
-      const size_t nb = (size_t)1 << (dg.bits - (dg.passes - 1) * dg.width);
-      for (int t = 0; t < threads; t++) {
-        uint32_t sum[(size_t)1 << NBS__RADIX_BITS];
-        const uint32_t *h = hist + (size_t)t * td->buckets;
-        for (size_t b = 0; b < nb; b++) {
-          uint32_t c = 0;
-          for (size_t i = b << r; i < (b + 1) << r; i++) c += h[i];
-          sum[b] = c;
-        }
-        memcpy(hist + (size_t)t * nb, sum, nb * sizeof *sum);
+  uint64_t ch = 0;
+  for (int t = 0; t < threads; t++) ch += changes[t];
+  if (choice && ch < (uint64_t)n / NBS__RADIX_PAIRS / 2) {
+    /* in cell order, or nearly: dg's digits; each thread's counts summed into the narrower
+     * digit's, at its place for those */
+    const nbs__digits nd = nbs__radix_digit(dg.bits - (dg.passes - 1) * dg.width);
+    const int r = td->width - nd.width;
+    for (int t = 0; t < threads; t++) {
+      uint32_t sum[(size_t)1 << NBS__RADIX_BITS];
+      const uint32_t *h = hist + (size_t)t * td->buckets;
+      for (size_t b = 0; b < nd.buckets; b++) {
+        uint32_t c = 0;
+        for (size_t i = b << r; i < (b + 1) << r; i++) c += h[i];
+        sum[b] = c;
       }
-      lo->width = dg.width;
-      shift = low + (dg.passes - 1) * dg.width;
-      *td = (nbs__digits){1, dg.bits - (dg.passes - 1) * dg.width, nb, 0};
+      memcpy(hist + (size_t)t * nd.buckets, sum, nd.buckets * sizeof *sum);
     }
+    lo->width = dg.width;
+    *td = nd;
+    shift = low + (dg.passes - 1) * dg.width;
   }
   lo->buckets = (size_t)1 << lo->width;
-  td->bits = td->width;
-  const size_t buckets = td->buckets;
-  const uint64_t d0 = (sk[0] >> shift) & (buckets - 1);
-  uint64_t same = 0;
-  for (int t = 0; t < threads; t++) same += hist[(size_t)t * buckets + d0];
-  if (same == (uint64_t)n) return false;
-  if (nbs__radix_offsets(hist, buckets, threads, top) > NBS__RADIX_LOCAL_MAX) return false;
-#if defined(_OPENMP)
-#pragma omp parallel num_threads(threads) if (threads > 1)
-#endif
-  NBS__PARTS(t, threads) {
-    nbs__radix_scatter(sk, NULL, dk, NULL, nbs__chunk(n, t, threads),
-                       nbs__chunk(n, t + 1, threads), shift, *td, hist + (size_t)t * buckets);
-  }
-  return true;
+  return nbs__radix_place(sk, NULL, dk, NULL, n, shift, *td, hist, threads, top);
 }
 
 /* The digits below the top one of the len packed words at a, which share their top digit,
@@ -1573,8 +1574,9 @@ nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
      * domain, N = 1e6, search 17.25 -> 12.99, time steps 28.0 -> 23.9 in all, two threads
      * 16.2 -> 14.1; AVX2 17.86 -> 13.92, generic 21.89 -> 16.48; uniform, sparse and
      * clustered within noise). 2D's short rows have such a test of their own. */
-    if (b - a0 > 1 || (q0[0] & q0[1] & q0[2] & q0[3]) >= 0)
+    if (b - a0 > 1 || (q0[0] & q0[1] & q0[2] & q0[3]) >= 0) {
       st = nbs__cs_row_blocks(c, s, a0, a, b, 4, base, q0, q1, below, upto, listed);
+    }
     lq1 = q0[2] >= 0 ? q1[2] : -1;
     prev_row = row;
     prev_a = a0;
