@@ -213,10 +213,11 @@ typedef struct nbs__run {
   bool step_over;
   /* The input was read by cellsort's pass for a detection from scratch
    * (nbs__cellsort_fresh): the grid comes from the bounds it measured, and the work block
-   * holds step 1's words made with the keying `pre`, of pre_bits bits. */
+   * holds step 1's words made with the keying `pre`, of pre_bits bits, packed with pre_eb
+   * element bits. */
   bool prewords;
   nbs__cs_kept pre;
-  int pre_bits;
+  int pre_bits, pre_eb;
   /* That pass overwrote the last detection's order of this n, which this detection would
    * not have started from (its starts paused, or too many elements moved), whose words had
    * dropped_eb element bits: nbs__cellsort counts the pause or the failed start all the
