@@ -304,7 +304,12 @@ static inline void nbs__radix_count(const uint64_t *sk, int32_t from, int32_t to
  * perf at 3D 1e7 in cell order: the count pass 4.2% -> below 2% of the detection, as in
  * random order. Tried and left out: the scatter two words at a time, both places read
  * before either is stored (the second's the first's plus one where they share the digit):
- * preparation 6.7 -> 7.0 (the scatter's waits on its stores were not what cost). */
+ * preparation 6.7 -> 7.0 (the scatter's waits on its stores were not what cost). Nor, for
+ * the top digit's pass over words far beyond the last-level cache (80 MB at 3D N = 1e7),
+ * each bucket's words gathered a line at a time and the line written with streaming stores,
+ * which do not read it first (as nbs__cs_part_scatter does): preparation 16.1-16.6 ->
+ * 31.1-37.9 ns per element (three runs of each, alternating, in a slow spell): the buckets'
+ * passes then read every word from memory, where the plain stores had left many in L3. */
 #define NBS__RADIX_WAYS 4
 static void nbs__radix_count_ways(const uint64_t *sk, int32_t from, int32_t to, int shift,
                                   nbs__digits dg, uint32_t *h) {
