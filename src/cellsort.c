@@ -19,7 +19,8 @@
  *      array for both (3D, N = 1e6: sort 5.4 -> 3.4 ns per element, detection 34 -> 31).
  *      Where they do not, but would for a crowded core of the elements (those two scenes:
  *      a few elements far out widen the keys), the core is sorted so and the others apart,
- *      and the two merged (nbs__cs_core);
+ *      and the two merged (nbs__cs_core); so too where they do, but the core's keys take
+ *      two passes fewer (2D sparse and clustered);
  *   3. gather the coordinates (and radii) in cell order, prefetching both ends of the
  *      element 256 places ahead into L2 and 32 ahead into L1 (nbs__cs_prefetch) where the
  *      input is over 8 MiB (NBS__CS_PREFETCH_MIN; below, the prefetches only cost): the last
@@ -2697,7 +2698,8 @@ static void nbs__cs_rekey_merge(const nbs__cs *c, const nbs__run *run, int64_t m
 
 /* Step b of nbs__cs_core for the elements [f, to): each one's key computed again
  * (nbs__cs_cellkey); the core's words to A, the outliers to key[] and idx[], both from
- * their start. The keying and its grid are copied to locals, which stay in registers (dim
+ * their start (packed keys, idx NULL: the outliers' words to key[]). The keying and its
+ * grid are copied to locals, which stay in registers (dim
  * a constant where this is inlined): read through pointers in the OpenMP region's own code,
  * the pass took twice as long. */
 static inline __attribute__((always_inline)) void
@@ -2720,9 +2722,11 @@ nbs__cs_core_split(const nbs__cs_keying *kg, const double *restrict x, int dim, 
     const uint64_t oz = dim == 3 ? (kk >> sz) - l2 : 0;
     if (ox < s0 && oy < s1 && oz < s2) {
       A[cc++] = ((oz << c1 | oy) << c0 | ox) << eb | (uint64_t)k;
-    } else {
+    } else if (idx) {
       key[oc] = kk;
       idx[oc++] = k;
+    } else {
+      key[oc++] = kk << eb | (uint64_t)k; /* packed keys: the outlier's word */
     }
   }
   *n_core = cc;
@@ -2777,16 +2781,21 @@ nbs__cs_core_split512_body(const nbs__cs_keying *kg, const double *restrict x, i
     _mm512_storeu_si512((void *)(A + cc), _mm512_maskz_compress_epi64(in, w));
     cc += __builtin_popcount(in);
     const __mmask8 out = (__mmask8)~in;
-    if (out) {
+    if (out && idx) {
       _mm512_storeu_si512((void *)(key + oc), _mm512_maskz_compress_epi64(out, kk));
       _mm256_storeu_si256((void *)(idx + oc),
                           _mm512_cvtepi64_epi32(_mm512_maskz_compress_epi64(out, es)));
+      oc += __builtin_popcount(out);
+    } else if (out) {
+      const __m512i ow = _mm512_or_si512(_mm512_sll_epi64(kk, seb), es);
+      _mm512_storeu_si512((void *)(key + oc), _mm512_maskz_compress_epi64(out, ow));
       oc += __builtin_popcount(out);
     }
     es = _mm512_add_epi64(es, eight);
   }
   int32_t tc = 0, to_ = 0;
-  nbs__cs_core_split(kg, x, dim, e, to, lo, cw, eb, A + cc, key + oc, idx + oc, &tc, &to_);
+  nbs__cs_core_split(kg, x, dim, e, to, lo, cw, eb, A + cc, key + oc, idx ? idx + oc : NULL,
+                     &tc, &to_);
   *n_core = cc + tc;
   *n_out = oc + to_;
 }
@@ -2840,13 +2849,19 @@ static void nbs__cs_core_split512(const nbs__cs_keying *kg, const double *x, int
  * of 2^13 where it was 2^16 (its reads are far apart, and they took 1-2 ns per element of
  * the detection) and the merge a run at a time (below), interleaved, min of 5: sparse 44.0
  * -> 39.3, clustered 39.4 -> 37.0; two threads 23.5 -> 21.0 and 21.6 -> 20.0; the same
- * bytes. Tried and left out: the same for packed words whose whole keys take four passes
- * or more (2D sparse and clustered: 43 bits, five passes to and from memory, against the
- * core's 23, three, the first in memory): no faster (2D sparse 23.2 / 23.2, clustered 23.6
- * / 23.2: the split and the merge cost what the two passes did), and the huge scene, whose
- * elements are spread evenly, paid for the sample and then sorted as before (3D 38.2 ->
- * 39.2, 2D 23.7 -> 24.4). Returns false, having written nothing
- * the caller needs, where the core's keys would not fit a word with the element either.
+ * bytes.
+ * Packed keys too (c->idx NULL: the whole keys share a word with the element), where they take
+ * four passes or more and the core's would save two (2D sparse and clustered, N = 1e6: 43
+ * bits, five passes, against the core's 23, three); the outliers are then packed words, and so
+ * is the merge's output, the words of the sort by the whole word (the time steps start from
+ * them as from any). First tried with the split a scalar loop: no faster (2D sparse 23.2 /
+ * 23.2, clustered 23.6 / 23.2: the split and the merge cost what the two passes did). With the
+ * split of nbs__cs_core_split512 (interleaved, medians of 6, preparation in ns per element, the
+ * same hashes): 2D sparse 12.27 -> 10.18, clustered 11.39 -> 10.50, two threads sparse 9.51 ->
+ * 7.02; time steps (which start from the last order) and the huge domain (whose core is the
+ * whole domain: no two passes saved, the sample only) the same. Returns false, having written
+ * nothing the caller needs, where the core's keys would not fit a word with the element
+ * either, or, for packed keys, would not save two passes.
  * Scratch: the coordinate arrays (the histograms, the core's words and the bucket scratch,
  * the outliers at their end). */
 static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_keying *kg,
@@ -2856,6 +2871,7 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
   const double *x = run->x;
   uint64_t *key = c->key;
   int32_t *idx = c->idx;
+  const bool packed = idx == NULL; /* the whole keys share a word with the element too */
   /* the key's fields: x sub-cell, iy, iz; where each starts and its bits */
   const int at[3] = {0, kg->sy, kg->sz};
   const int wd[3] = {c->bx, c->by, dim == 3 ? bits - c->bx - c->by : 0};
@@ -2938,6 +2954,9 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
     cb += cw[a];
   }
   if (cb + eb > 63) return false;
+  /* packed keys: only where the core's keys save two passes or more (the split and the merge
+   * cost about what a pass in the cache does) */
+  if (packed && nbs__radix_digits(cb).passes + 2 > nbs__radix_digits(bits).passes) return false;
   /* b. the core's words at the start of each thread's part of the coordinate arrays, the
    * outliers at the start of its part of key[] and idx[] */
   uint64_t *A = (uint64_t *)(void *)c->xs;
@@ -2950,13 +2969,16 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
     const int32_t f = from[t], to = from[t + 1];
 #if NBS__CS_AVX512
     if (run->ctx->simd == NBS__SIMD_AVX512) {
-      nbs__cs_core_split512(kg, x, f, to, lo, cw, eb, A + f, key + f, idx + f, &nc[t], &no[t]);
+      nbs__cs_core_split512(kg, x, f, to, lo, cw, eb, A + f, key + f, packed ? NULL : idx + f, &nc[t],
+                            &no[t]);
     } else
 #endif
     if (dim == 3) {
-      nbs__cs_core_split(kg, x, 3, f, to, lo, cw, eb, A + f, key + f, idx + f, &nc[t], &no[t]);
+      nbs__cs_core_split(kg, x, 3, f, to, lo, cw, eb, A + f, key + f, packed ? NULL : idx + f, &nc[t],
+                            &no[t]);
     } else {
-      nbs__cs_core_split(kg, x, 2, f, to, lo, cw, eb, A + f, key + f, idx + f, &nc[t], &no[t]);
+      nbs__cs_core_split(kg, x, 2, f, to, lo, cw, eb, A + f, key + f, packed ? NULL : idx + f, &nc[t],
+                            &no[t]);
     }
   }
   /* the outliers together, and the core's words together, each in element order: the radix
@@ -2966,7 +2988,7 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
   for (int t = 0; t < threads; t++) {
     if (NO != from[t] && no[t] > 0) {
       memmove(key + NO, key + from[t], (size_t)no[t] * sizeof *key);
-      memmove(idx + NO, idx + from[t], (size_t)no[t] * sizeof *idx);
+      if (!packed) memmove(idx + NO, idx + from[t], (size_t)no[t] * sizeof *idx);
     }
     if (NC != from[t] && nc[t] > 0) memmove(A + NC, A + from[t], (size_t)nc[t] * sizeof *A);
     NO += no[t];
@@ -2974,10 +2996,11 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
   }
   /* c. the outliers, sorted to the end of the coordinate arrays; then the core */
   const size_t W = (size_t)n * (size_t)dim;
-  uint64_t *tk = A + W - ((size_t)NO + ((size_t)NO + 1) / 2);
-  int32_t *ti = (int32_t *)(void *)(tk + NO);
+  uint64_t *tk = A + W - ((size_t)NO + (packed ? 0 : ((size_t)NO + 1) / 2));
+  int32_t *ti = packed ? NULL : (int32_t *)(void *)(tk + NO);
   if (NO > 0) {
-    nbs__radix(key, idx, tk, ti, tk, ti, NO, 0, nbs__radix_digits(bits), hist, 1, NULL, 0);
+    nbs__radix(key, idx, tk, ti, tk, ti, NO, packed ? eb : 0, nbs__radix_digits(bits), hist,
+               1, NULL, 0);
   }
   if (NC > 0) {
     nbs__radix(A, NULL, key, NULL, key, NULL, NC, eb, nbs__radix_digits(cb), hist, threads,
@@ -2997,15 +3020,20 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
 #define NBS__CS_WHOLE(w)                                                                       \
   ((((w) >> eb >> c01) + lo[2]) << s2 | ((((w) >> eb >> c0) & m1) + lo[1]) << s1 |               \
    ((((w) >> eb) & m0) + lo[0]))
-  /* core word w to place p: its key in the whole grid's terms, and its element */
+  /* core word w to place p: its key in the whole grid's terms, and its element (packed keys:
+   * the word of the two) */
 #define NBS__CS_BACK(p, w)                                                                     \
   do {                                                                                        \
-    idx[p] = (int32_t)((w) & em);                                                             \
-    key[p] = NBS__CS_WHOLE(w);                                                                \
+    if (packed) {                                                                             \
+      key[p] = NBS__CS_WHOLE(w) << eb | ((w) & em);                                           \
+    } else {                                                                                  \
+      idx[p] = (int32_t)((w) & em);                                                           \
+      key[p] = NBS__CS_WHOLE(w);                                                              \
+    }                                                                                         \
   } while (0)
   int32_t r = NC; /* the core words below outlier j + 1 */
   for (int32_t j = NO - 1; j >= 0; j--) {
-    const uint64_t o = tk[j];
+    const uint64_t o = packed ? tk[j] >> eb : tk[j]; /* its key */
     /* the core words above o: [lo_, r) */
     int32_t lo_;
 #define NBS__CS_BELOW(i) (NBS__CS_WHOLE(key[i]) < o)
@@ -3024,8 +3052,12 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
       const uint64_t w = key[q];
       NBS__CS_BACK(q + by, w);
     }
-    key[lo_ + j] = o;
-    idx[lo_ + j] = ti[j];
+    if (packed) {
+      key[lo_ + j] = tk[j];
+    } else {
+      key[lo_ + j] = o;
+      idx[lo_ + j] = ti[j];
+    }
     r = lo_;
   }
   const int32_t i = r - 1;
@@ -3335,8 +3367,10 @@ static void nbs__cs_sort_gather(const nbs__cs *c, const nbs__run *run, const nbs
       nbs__cs_partition(c, run, kg, eb, dg, hist, threads, spare, spare_bytes);
   if (run->ctx->cs_partitioned) return;
   /* 1-2 by the crowded core's keys, where they fit a word with the element and the whole
-   * keys do not; else: */
-  if (packed || !nbs__cs_core(c, run, kg, eb, bits, hist, threads)) {
+   * keys do not, or where the whole keys do but take four passes or more and the core's two
+   * fewer (not where nbs__cellsort_fresh has made the words already); else: */
+  const bool core = !packed || (!words && dg.passes >= 4);
+  if (!core || !nbs__cs_core(c, run, kg, eb, bits, hist, threads)) {
     /* 1. keys (the grid in locals; with the small inputs' gather's locals below, 3D N = 1e6
      * 33.8 -> 33.5 ns per element, 1e4 23.2 -> 23.0-23.2, 2D 1e4 11.8 -> 11.4, interleaved,
      * min of 4-6; the same loops written out for each dimension, with it a constant, were
@@ -3929,7 +3963,7 @@ nbs_status nbs__cellsort(nbs__run *run) {
     const bool words = run->prewords && packed && eb == run->pre_eb && bits == run->pre_bits &&
                        nbs__cs_kept_same(&run->pre, &kg);
     ctx->cs_fresh_words = words;
-      nbs__cs_sort_gather(&c, run, &kg, packed, eb, bits, words, hist, threads, w + at[0],
+    nbs__cs_sort_gather(&c, run, &kg, packed, eb, bits, words, hist, threads, w + at[0],
                         at[1] - at[0]);
   }
   for (size_t t = nn; t < nn + NBS__CS_PAD; t++) c.key[t] = UINT64_MAX;

@@ -559,6 +559,15 @@ static void test_core(void) {
   far = core_scene(2, 100000, 0.5, 50.0, 40000.0, 0x1p28, 98, &s);
   check_cellsort_threads(&s, 4, "2D core", far + 1);
   scene_free(&s);
+  /* keys that share a word with the element, of five passes, where the core's take three
+   * (the core's words and the outliers' packed as the whole keys are): 2D 20 + 18 bits and
+   * 17 for the element, 3D 20 + 13 + 13 and 16 */
+  far = core_scene(2, 100000, 0.5, 50.0, 40000.0, 0x1p16, 96, &s);
+  check_cellsort_threads(&s, 4, "2D core, packed keys", far + 1);
+  scene_free(&s);
+  far = core_scene(3, 60000, 0.3, 30.0, 40000.0, 0x1p11, 95, &s);
+  check_cellsort_threads(&s, 4, "3D core, packed keys", far + 1);
+  scene_free(&s);
   /* Few elements: the histograms and the sample's keys share the coordinate arrays, 8 dim n
    * bytes (at 2D n = 2962 the keys once ran past the end of the work block: ASan) */
   const int64_t small[] = {2962, 777, 100, 40};
