@@ -2699,9 +2699,8 @@ static void nbs__cs_rekey_merge(const nbs__cs *c, const nbs__run *run, int64_t m
 /* Step b of nbs__cs_core for the elements [f, to): each one's key computed again
  * (nbs__cs_cellkey); the core's words to A, the outliers to key[] and idx[], both from
  * their start (packed keys, idx NULL: the outliers' words to key[]). The keying and its
- * grid are copied to locals, which stay in registers (dim
- * a constant where this is inlined): read through pointers in the OpenMP region's own code,
- * the pass took twice as long. */
+ * grid are copied to locals, which stay in registers (dim a constant where this is inlined):
+ * read through pointers in the OpenMP region's own code, the pass took twice as long. */
 static inline __attribute__((always_inline)) void
 nbs__cs_core_split(const nbs__cs_keying *kg, const double *restrict x, int dim, int32_t f,
                    int32_t to, const uint64_t lo[3], const int cw[3], int eb,
@@ -2781,14 +2780,14 @@ nbs__cs_core_split512_body(const nbs__cs_keying *kg, const double *restrict x, i
     _mm512_storeu_si512((void *)(A + cc), _mm512_maskz_compress_epi64(in, w));
     cc += __builtin_popcount(in);
     const __mmask8 out = (__mmask8)~in;
-    if (out && idx) {
-      _mm512_storeu_si512((void *)(key + oc), _mm512_maskz_compress_epi64(out, kk));
-      _mm256_storeu_si256((void *)(idx + oc),
-                          _mm512_cvtepi64_epi32(_mm512_maskz_compress_epi64(out, es)));
-      oc += __builtin_popcount(out);
-    } else if (out) {
-      const __m512i ow = _mm512_or_si512(_mm512_sll_epi64(kk, seb), es);
-      _mm512_storeu_si512((void *)(key + oc), _mm512_maskz_compress_epi64(out, ow));
+    if (out) {
+      /* the outliers' keys and elements, or (packed keys) their words */
+      const __m512i ov = idx ? kk : _mm512_or_si512(_mm512_sll_epi64(kk, seb), es);
+      _mm512_storeu_si512((void *)(key + oc), _mm512_maskz_compress_epi64(out, ov));
+      if (idx) {
+        _mm256_storeu_si256((void *)(idx + oc),
+                            _mm512_cvtepi64_epi32(_mm512_maskz_compress_epi64(out, es)));
+      }
       oc += __builtin_popcount(out);
     }
     es = _mm512_add_epi64(es, eight);
@@ -2967,18 +2966,16 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
 #endif
   NBS__PARTS(t, threads) {
     const int32_t f = from[t], to = from[t + 1];
+    int32_t *oi = packed ? NULL : idx + f; /* the outliers' elements (packed: in their words) */
 #if NBS__CS_AVX512
     if (run->ctx->simd == NBS__SIMD_AVX512) {
-      nbs__cs_core_split512(kg, x, f, to, lo, cw, eb, A + f, key + f, packed ? NULL : idx + f, &nc[t],
-                            &no[t]);
+      nbs__cs_core_split512(kg, x, f, to, lo, cw, eb, A + f, key + f, oi, &nc[t], &no[t]);
     } else
 #endif
     if (dim == 3) {
-      nbs__cs_core_split(kg, x, 3, f, to, lo, cw, eb, A + f, key + f, packed ? NULL : idx + f, &nc[t],
-                            &no[t]);
+      nbs__cs_core_split(kg, x, 3, f, to, lo, cw, eb, A + f, key + f, oi, &nc[t], &no[t]);
     } else {
-      nbs__cs_core_split(kg, x, 2, f, to, lo, cw, eb, A + f, key + f, packed ? NULL : idx + f, &nc[t],
-                            &no[t]);
+      nbs__cs_core_split(kg, x, 2, f, to, lo, cw, eb, A + f, key + f, oi, &nc[t], &no[t]);
     }
   }
   /* the outliers together, and the core's words together, each in element order: the radix
