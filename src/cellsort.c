@@ -713,9 +713,10 @@ struct nbs__cs_ranges {
   int32_t q0[NBS__CS_RANGES], q1[NBS__CS_RANGES];
   /* places >= 0: the places of the ranges before the block, in order (the last range up to
    * the block only), listed by the AVX-512 sweep as it found the ranges (nbs__cs_list), or
-   * by nbs__cs_offer_slices for a slice; the AVX-512 kernel's steps are then one loop over
-   * them. -1: not listed (the other kernels' sweeps, and 2D rows swept element by element,
-   * never in 3D); the kernel loops over each range. */
+   * by nbs__cs_offer_slices for a slice (3D rows swept element by element list theirs
+   * after finding them all); the AVX-512 kernel's steps are then one loop over them. -1: not
+   * listed (the other kernels' sweeps, and 2D rows swept element by element, never in 3D);
+   * the kernel loops over each range. */
   int32_t places;
   const int32_t *list; /* where places >= 0 */
 };
@@ -1501,10 +1502,26 @@ nbs__cs_row_blocks(const nbs__cs *c, nbs__sink *s, int32_t row_a, int32_t a, int
   return st;
 }
 
+/* A 3D row of fewer elements than this is swept element by element (nbs__cs_sweep3_body);
+ * at most NBS__CS_PAD + 1, for the padding after the keys. */
+#define NBS__CS_SHORT3 3
+
 /* 3D: sweeps the places [from, to) of the cell order (from and to at rows' starts or at
- * blocks of a row: nbs__cs_thread_start), each row by its blocks (nbs__cs_row_blocks), with
- * the four neighbouring rows of the half mask, (dy, dz) = (-1, -1) (0, -1) (1, -1) (-1, 0)
- * in key order. */
+ * blocks of a long row: nbs__cs_thread_start), with the four neighbouring rows of the half
+ * mask, (dy, dz) = (-1, -1) (0, -1) (1, -1) (-1, 0) in key order.
+ * A row of NBS__CS_SHORT3 elements or more is swept by its blocks (nbs__cs_row_blocks). A
+ * shorter one, element by element, as in 2D (nbs__cs_sweep2_body): element p meets the
+ * elements before it in its own row within one cell edge in x, those of the row before it
+ * in its layer within one edge either side (both among the sixteen keys before p, counted
+ * at once, or found by search further back), and those of the three rows of the layer
+ * below, (y - 1 .. y + 1, z - 1), within one edge either side. Those three rows are
+ * consecutive in key order, so one cursor, moved forwards to the first key from the start
+ * of row (y - 1, z - 1) on, and counts of the sixteen keys from it find all three windows
+ * (a search from the cursor where they reach further). Nothing else is carried from one
+ * element to the next.
+ * Why: in a sparse domain most rows hold an element or two, and a row swept by blocks
+ * waited on finding its end, the cursor of each of its four neighbouring rows and each
+ * row's window, one after the other, and most of those rows were empty. */
 static inline __attribute__((always_inline)) nbs_status
 nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
                     nbs__cs_count_fn below, nbs__cs_count_fn upto, bool listed) {
@@ -1512,101 +1529,224 @@ nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
   const uint64_t *key = c->key;
   const int bx = c->bx, by = c->by, ks = c->ks, kx = bx + ks;
   const uint64_t my = ((uint64_t)1 << by) - 1;
+  const uint64_t low = ((uint64_t)1 << ks) - 1, mx = ((uint64_t)1 << bx) - 1;
+  const uint64_t fine = c->fine;
   const int64_t ny = c->ny;
   static const int row_dy[4] = {-1, 0, 1, -1}, row_dz[4] = {-1, -1, -1, 0};
   int32_t cur[4] = {-1, -1, -1, -1};
-  /* where the last row's window in the row below it (dy = +1, dz = -1) ended (-1: none) */
+  /* where the last row's window in the row below it (dy = +1, dz = -1) ended (-1: none,
+   * or the last row was short) */
   int32_t lq1 = -1;
-  int32_t a = from, prev_a = -1;
+  /* the last row begun, and its first place (-1: none yet in this range) */
+  int32_t prev_a = -1;
   uint64_t prev_row = 0;
-  while (a < to && st == NBS_OK) {
-    const uint64_t row = key[a] >> kx;
-    /* the row's start: a, unless a thread's range starts inside the row */
-    const int32_t a0 = a == from && a > 0 && key[a - 1] >> kx == row
-                           ? nbs__cs_lower(key, a, row << kx)
-                           : a;
-    /* the row's end: a loop by key, since a sparse scene's rows hold one element, an exit
-     * a branch predicts (sixteen keys at a time, as in 2D, was slower: huge domain, N =
-     * 1e6, 35.1 against 32.7 ns per element). It stops at `to` at the latest. */
-    int32_t b = a + 1;
-    while (b < to && key[b] >> kx == row) b++;
+  /* the short rows' cursor in the layer below (-1: none yet in this range) */
+  int32_t sc = -1;
+  int32_t list[NBS__CS_SLICE + 16]; /* a short row's element's places, where listed */
+  int32_t p = from;
+  while (p < to && st == NBS_OK) {
+    const uint64_t k = key[p] >> ks, row = k >> bx;
+    const bool first = p == 0 || key[p - 1] >> kx != row;
+    /* a thread's range that starts inside a row starts at one of its blocks, so the row is
+     * a long one */
+    const bool inside = p == from && !first;
     const int64_t iy = (int64_t)(row & my), iz = (int64_t)(row >> by);
-    /* the neighbouring rows: their first element (or -1: empty or outside) */
-    uint64_t base[4];
-    int32_t q0[4], q1[4];
-    /* Row y, right after row y - 1 in its layer: its cursors at rows y - 1 and y of the
-     * layer below are those row y - 1 had there, and the one at y + 1 starts where row
-     * y - 1's window in row y ended, a few places before it. Each cursor moved from its
-     * own place went over a whole row of the layer below for every row swept, sixteen keys
-     * a step, each step waiting for the one before (3D, N = 1e6: search 15.4 -> 14.6 ns
-     * per element). Tried first: each cursor from the furthest of the places known to lie
-     * before its row, chosen for every row: the huge domain's search, whose rows seldom
-     * follow one another, 16.1 -> 26.7. Selected without a branch (with one, the sparse
-     * scene's search took 0.4 ns more). */
-    {
-      const bool next = (prev_a >= 0) & (row == prev_row + 1) & (row >> by == prev_row >> by);
-      const int32_t c1 = cur[1], c2 = cur[2], l2 = lq1 > c2 ? lq1 : c2;
-      cur[0] = next ? c1 : cur[0];
-      cur[1] = next ? c2 : c1;
-      cur[2] = next ? l2 : c2;
+    if ((first && key[p + NBS__CS_SHORT3 - 1] >> kx == row) || inside) {
+      /* a long row: by blocks. Its start: p, unless a thread's range starts inside the row */
+      const int32_t a = p;
+      const int32_t a0 = inside ? nbs__cs_lower(key, a, row << kx) : a;
+      /* its end: a loop by key, from the last place known to be in it (a 3D key may have
+       * 64 bits, so the padding after the keys may be in the last row); it stops at `to` at
+       * the latest */
+      int32_t b = inside ? a + 1 : a + NBS__CS_SHORT3;
+      if (b > to) b = to;
+      while (b < to && key[b] >> kx == row) b++;
+      /* the neighbouring rows: their first element (or -1: empty or outside) */
+      uint64_t base[4];
+      int32_t q0[4], q1[4];
+      /* Row y, right after row y - 1 in its layer: its cursors at rows y - 1 and y of the
+       * layer below are those row y - 1 had there, and the one at y + 1 starts where row
+       * y - 1's window in row y ended, a few places before it. Each cursor moved from its
+       * own place went over a whole row of the layer below for every row swept, sixteen keys
+       * a step, each step waiting for the one before (3D, N = 1e6: search 15.4 -> 14.6 ns
+       * per element). Tried first: each cursor from the furthest of the places known to lie
+       * before its row, chosen for every row: the huge domain's search, whose rows seldom
+       * follow one another, 16.1 -> 26.7. Selected without a branch (with one, the sparse
+       * scene's search took 0.4 ns more). A short row before sets all three cursors to its
+       * own, which lies before each of them. */
+      {
+        const bool next = (prev_a >= 0) & (row == prev_row + 1) & (row >> by == prev_row >> by);
+        const int32_t c1 = cur[1], c2 = cur[2], l2 = lq1 > c2 ? lq1 : c2;
+        cur[0] = next ? c1 : cur[0];
+        cur[1] = next ? c2 : c1;
+        cur[2] = next ? l2 : c2;
+      }
+      /* The three rows of the layer below, (y - 1, z - 1) to (y + 1, z - 1), are consecutive
+       * in key order: where the first key from the first of them on lies past the third, all
+       * three are empty, and one cursor's step finds it, where each row's took its own (and
+       * its own check of what it found). A sparse scene's rows find them so nearly always; a
+       * crowded one's seldom, at the cost of one more step per row of many elements (3D,
+       * N = 1e6, one thread, interleaved, medians of 5, search in ns per element: huge domain
+       * 15.32 -> 10.02, two threads 7.95 -> 5.25; uniform 13.81 / 13.63, sparse 14.29 /
+       * 14.35, clustered 13.75 / 13.86; the same bytes). */
+      int r0 = 0;
+      if (iz >= 1 && iy >= 1 && iy + 1 < ny && cur[0] >= 0) {
+        const uint64_t trow = (uint64_t)(iz - 1) << by | (uint64_t)(iy - 1);
+        int32_t q = cur[0];
+        NBS__CS_ADVANCE(key, q, below, trow << bx << ks);
+        cur[0] = q;
+        if (key[q] >> kx > trow + 2) {
+          cur[1] = cur[2] = q;
+          q0[0] = q0[1] = q0[2] = -1;
+          r0 = 3;
+        }
+      }
+      for (int r = r0; r < 4; r++) {
+        q0[r] = -1;
+        const int64_t y = iy + row_dy[r], z = iz + row_dz[r];
+        if (y < 0 || y >= ny || z < 0) continue;
+        const uint64_t trow = (uint64_t)z << by | (uint64_t)y;
+        base[r] = trow << bx;
+        int32_t q = cur[r];
+        if (row_dz[r] == 0 && prev_a >= 0) {
+          /* the row before in the same layer: the last row begun, if it is that row (else
+           * the row is empty, and its window starts at a, whose keys are above it) */
+          q = prev_row == trow ? prev_a : a;
+        } else {
+          /* first use: search, then forwards */
+          if (q < 0) q = nbs__cs_lower(key, a, base[r] << ks);
+          /* stops at a at the latest: its row > trow */
+          NBS__CS_ADVANCE(key, q, below, base[r] << ks);
+          cur[r] = q;
+        }
+        /* most of a sparse scene's neighbouring rows are empty, and the branch costs less
+         * than the empty windows */
+        if (key[q] >> kx == trow) q0[r] = q1[r] = q;
+      }
+      /* A row of one element whose four neighbouring rows are all empty (q0 < 0 in each:
+       * their AND is negative) has nothing in reach: no call. nbs__cs_row_blocks finds the
+       * same (its "nothing in reach" test), but only after its prefetches and set-up, at
+       * every one of the huge domain's rows, most of which hold one element alone
+       * (interleaved, medians, ns per element, the same bytes and candidates: 3D huge
+       * domain, N = 1e6, search 17.25 -> 12.99, time steps 28.0 -> 23.9 in all, two threads
+       * 16.2 -> 14.1; AVX2 17.86 -> 13.92, generic 21.89 -> 16.48; uniform, sparse and
+       * clustered within noise). */
+      if (b - a0 > 1 || (q0[0] & q0[1] & q0[2] & q0[3]) >= 0) {
+        st = nbs__cs_row_blocks(c, s, a0, a, b, 4, base, q0, q1, below, upto, listed);
+      }
+      lq1 = q0[2] >= 0 ? q1[2] : -1;
+      /* the short rows' cursor: the first place from row (y - 1, z - 1) on (or an older
+       * one), which lies before the first of any later row's three rows below */
+      sc = cur[0] > sc ? cur[0] : sc;
+      prev_row = row;
+      prev_a = a0;
+      p = b;
+      continue;
     }
-    /* The three rows of the layer below, (y - 1, z - 1) to (y + 1, z - 1), are consecutive in
-     * key order: where the first key from the first of them on lies past the third, all three
-     * are empty, and one cursor's step finds it, where each row's took its own (and its own
-     * check of what it found). A sparse scene's rows find them so nearly always; a crowded
-     * one's seldom, at the cost of one more step per row of many elements (3D, N = 1e6, one
-     * thread, interleaved, medians of 5, search in ns per element: huge domain 15.32 -> 10.02,
-     * two threads 7.95 -> 5.25; uniform 13.81 / 13.63, sparse 14.29 / 14.35, clustered 13.75 /
-     * 13.86; the same bytes). */
-    int r0 = 0;
-    if (iz >= 1 && iy >= 1 && iy + 1 < ny && cur[0] >= 0) {
-      const uint64_t trow = (uint64_t)(iz - 1) << by | (uint64_t)(iy - 1);
-      int32_t q = cur[0];
-      NBS__CS_ADVANCE(key, q, below, trow << bx << ks);
-      cur[0] = q;
-      if (key[q] >> kx > trow + 2) {
-        cur[1] = cur[2] = q;
-        q0[0] = q0[1] = q0[2] = -1;
-        r0 = 3;
+    /* a short row: element p alone */
+    prev_row = first ? row : prev_row;
+    prev_a = first ? p : prev_a;
+    if ((p & (NBS__CS_LANES - 1)) == 0 && p + NBS__CS_SWEEP_AHEAD < c->n) {
+      __builtin_prefetch(key + p + NBS__CS_SWEEP_AHEAD);
+      __builtin_prefetch(c->xs + p + NBS__CS_SWEEP_AHEAD);
+      __builtin_prefetch(c->ys + p + NBS__CS_SWEEP_AHEAD);
+      __builtin_prefetch(c->zs + p + NBS__CS_SWEEP_AHEAD);
+      if (c->rs) __builtin_prefetch(c->rs + p + NBS__CS_SWEEP_AHEAD);
+      if (c->istep == 1) __builtin_prefetch(c->ids + p + NBS__CS_SWEEP_AHEAD);
+    }
+    const uint64_t x = k & mx;
+    const uint64_t xl = x > fine ? x - fine : 0, xh = mx - x > fine ? x + fine : mx;
+    nbs__cs_ranges rg;
+    rg.count = 0;
+    rg.places = -1;
+    /* the layer below: rows y - 1 .. y + 1 of z - 1 where they exist, their windows
+     * [lo, hi] of words, found from the cursor at the first key from the first window's lo
+     * on */
+    if (iz >= 1) {
+      const int64_t y0 = iy >= 1 ? iy - 1 : iy, y1 = iy + 1 < ny ? iy + 1 : iy;
+      const uint64_t lrow = (uint64_t)(iz - 1) << by;
+      /* the cursor: the first place from row y0's start on, not from its window's (lo0):
+       * where y0 is the row's own y (y = 0), the window of a later element of the layer's
+       * next row starts further back in that row */
+      const uint64_t r0 = (lrow | (uint64_t)y0) << bx << ks;
+      int32_t q = sc;
+      if (q < 0) q = nbs__cs_lower(key, p, r0);
+      NBS__CS_ADVANCE(key, q, below, r0); /* stops at p at the latest */
+      sc = q;
+      /* the rows below of a long row to come lie at or after it: its cursors */
+      cur[0] = cur[1] = cur[2] = q;
+      lq1 = -1;
+      const uint64_t hi1 = ((lrow | (uint64_t)y1) << bx | xh) << ks | low;
+      /* the first key from the first window on past the last: all three are empty */
+      const int32_t in = key[q] > hi1 ? 0 : upto(key + q, hi1);
+      const bool near = in < NBS__CS_PAD;
+      for (int64_t y = y0; y <= y1 && in > 0; y++) {
+        const uint64_t lo = ((lrow | (uint64_t)y) << bx | xl) << ks;
+        const uint64_t hi = ((lrow | (uint64_t)y) << bx | xh) << ks | low;
+        int32_t e0, e1;
+        if (near) {
+          e0 = q + below(key + q, lo);
+          e1 = q + upto(key + q, hi);
+        } else {
+          e0 = q;
+          NBS__CS_ADVANCE(key, e0, below, lo);
+          e1 = e0;
+          NBS__CS_ADVANCE(key, e1, upto, hi);
+        }
+        rg.q0[rg.count] = e0;
+        rg.q1[rg.count] = e1;
+        rg.count += e1 > e0;
       }
     }
-    for (int r = r0; r < 4; r++) {
-      q0[r] = -1;
-      const int64_t y = iy + row_dy[r], z = iz + row_dz[r];
-      if (y < 0 || y >= ny || z < 0) continue;
-      const uint64_t trow = (uint64_t)z << by | (uint64_t)y;
-      base[r] = trow << bx;
-      int32_t q = cur[r];
-      if (row_dz[r] == 0 && prev_a >= 0) {
-        /* the row before in the same layer: the last row swept, if it is that row (else
-         * the row is empty, and its window starts at a, whose keys are above it) */
-        q = prev_row == trow ? prev_a : a;
-      } else {
-        /* first use: search, then forwards */
-        if (q < 0) q = nbs__cs_lower(key, a, base[r] << ks);
-        /* stops at a at the latest: its row > trow */
-        NBS__CS_ADVANCE(key, q, below, base[r] << ks);
-        cur[r] = q;
+    /* the layer's own rows: the row before (y - 1), x - fine .. x + fine (a word above `hb`
+     * is past it), and the own row from x - fine on. The places before p: from p - c1 on,
+     * keys from lb on; from p - c2, above hb; from p - c3, in reach in the own row (c1 >=
+     * c2 >= c3: lb <= hb < own) */
+    const uint64_t own = (row << bx | xl) << ks;
+    const uint64_t lb = ((row - 1) << bx | xl) << ks, hb = ((row - 1) << bx | xh) << ks | low;
+    int32_t c1, c2, c3;
+    if (p == 0 || key[p - 1] < (iy >= 1 ? lb : own)) {
+      /* the key before p is before both: nothing in reach in the layer */
+      c1 = c2 = c3 = 0;
+    } else if (p >= NBS__CS_PAD) {
+      const uint64_t *back = key + p - NBS__CS_PAD;
+      c3 = NBS__CS_PAD - below(back, own);
+      c1 = c2 = c3;
+      if (iy >= 1) {
+        c1 = NBS__CS_PAD - below(back, lb);
+        c2 = NBS__CS_PAD - upto(back, hb);
       }
-      /* most of a sparse scene's neighbouring rows are empty, and the branch costs less
-       * than the empty windows */
-      if (key[q] >> kx == trow) q0[r] = q1[r] = q;
+    } else {
+      c1 = NBS__CS_PAD; /* the search below */
     }
-    /* A row of one element whose four neighbouring rows are all empty (q0 < 0 in each:
-     * their AND is negative) has nothing in reach: no call. nbs__cs_row_blocks finds the
-     * same (its "nothing in reach" test), but only after its prefetches and set-up, at
-     * every one of the huge domain's rows, most of which hold one element alone
-     * (interleaved, medians, ns per element, the same bytes and candidates: 3D huge
-     * domain, N = 1e6, search 17.25 -> 12.99, time steps 28.0 -> 23.9 in all, two threads
-     * 16.2 -> 14.1; AVX2 17.86 -> 13.92, generic 21.89 -> 16.48; uniform, sparse and
-     * clustered within noise). 2D's short rows have such a test of their own. */
-    if (b - a0 > 1 || (q0[0] & q0[1] & q0[2] & q0[3]) >= 0) {
-      st = nbs__cs_row_blocks(c, s, a0, a, b, 4, base, q0, q1, below, upto, listed);
+    if (c1 == NBS__CS_PAD) {
+      /* as many keys in reach as were counted, or too few keys before p: search */
+      c3 = p - nbs__cs_lower(key, p, own);
+      c1 = c2 = c3;
+      if (iy >= 1) {
+        c1 = p - nbs__cs_lower(key, p, lb);
+        c2 = p - nbs__cs_lower(key, p, hb + 1); /* hb < own: no overflow */
+      }
     }
-    lq1 = q0[2] >= 0 ? q1[2] : -1;
-    prev_row = row;
-    prev_a = a0;
-    a = b;
+    rg.q0[rg.count] = p - c1;
+    rg.q1[rg.count] = p - c2;
+    rg.count += c1 > c2;
+    rg.q0[rg.count] = p - c3;
+    rg.q1[rg.count] = p + 1;
+    if (rg.count > 0 || c3 > 0) {
+      rg.count++;
+      if (listed) {
+        /* the places before p, for the AVX-512 kernel, which in 3D loops over a list */
+        int32_t places = 0;
+        for (int r = 0; r < rg.count; r++) {
+          places = nbs__cs_list(list, places, rg.q0[r], r == rg.count - 1 ? p : rg.q1[r]);
+        }
+        rg.places = places;
+        rg.list = list;
+      }
+      st = nbs__cs_offer(c, s, p, 1, &rg);
+    }
+    p++;
   }
   return st;
 }

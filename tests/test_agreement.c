@@ -8,6 +8,8 @@
 #include "test.h"
 #include "util.h"
 
+#include <math.h>
+
 typedef struct case_def {
   const char *label;
   scene_kind kind;
@@ -499,53 +501,141 @@ static void short_rows_scene(int64_t chain, bool radii, uint64_t seed, scene *s)
   }
 }
 
-/* cellsort's rows swept element by element (short_rows_scene): the contacts of direct,
- * candidates a superset of them, the same bytes through a callback, max_pairs kept; with
- * and without radii; then, large enough for threads, the same bytes for 1 to 4 threads and
- * the contacts of NBS. */
+/* 3D rows of one to three elements, in every relation the sweep meets element by element
+ * (nbs__cs_sweep3_body, rows of fewer than NBS__CS_SHORT3 = 3): 16 chains of `chain`
+ * elements in all, each element 0.55 from the one before (touching it) in a direction drawn
+ * with z up, so that a chain climbs through the layers and meets the rows before it in its
+ * layer and the three rows of the layer below at every x offset; every 97th doubled at the
+ * same coordinates (equal keys); and every 1250 elements two long rows of 150 elements 0.3
+ * apart across the chain, one a layer below it and one a row before it in its layer, so
+ * that rows of blocks and rows of elements meet and an element above a long row has more
+ * than sixteen keys in reach (a search then finds them). `thin` keeps y in [0, 2.4]
+ * (reflected): three rows per layer, so that rows of y = 0, whose rows below begin in
+ * their own y, follow rows of the largest y. With radii (radii true), each element's is
+ * drawn from [0.15, 0.5]. Shuffled. */
+static void short_rows3_scene(int64_t chain, bool radii, bool thin, uint64_t seed, scene *s) {
+  const int chains = 16;
+  const int64_t lines = chain / 1250, line = 150, doubles = chain / 97 + 1;
+  memset(s, 0, sizeof *s);
+  s->dim = 3;
+  s->n = chain + doubles + 2 * lines * line;
+  s->diameter = 1.0;
+  s->coords = malloc((size_t)s->n * 3 * sizeof *s->coords);
+  if (radii) s->radii = malloc((size_t)s->n * sizeof *s->radii);
+  uint64_t state = seed;
+  double at[16][3];
+  for (int c = 0; c < chains; c++) {
+    at[c][0] = 5.0 * (double)c;
+    at[c][1] = thin ? 2.4 * test_unit(&state) : 20.0 * test_unit(&state);
+    at[c][2] = 3.0 * test_unit(&state);
+  }
+  int64_t e = 0;
+  for (int64_t k = 0; k < chain; k++, e++) {
+    double *x = at[k % chains];
+    const double a = 2.0 * test_unit(&state) - 1.0, b = 2.0 * test_unit(&state) - 1.0;
+    const double len = sqrt(a * a + b * b + 1.0);
+    x[0] += 0.55 * a / len;
+    x[1] += 0.55 * b / len;
+    x[2] += 0.55 / len;
+    if (thin) x[1] = x[1] < 0.0 ? -x[1] : x[1] > 2.4 ? 4.8 - x[1] : x[1];
+    memcpy(s->coords + 3 * e, x, 3 * sizeof *x);
+    if (k % 97 == 0) {
+      e++;
+      memcpy(s->coords + 3 * e, x, 3 * sizeof *x);
+    }
+    if (k % 1250 == 1249) {
+      for (int r = 0; r < 2; r++) {
+        for (int64_t q = 0; q < line; q++) {
+          double *y = s->coords + 3 * ++e;
+          y[0] = x[0] - 22.5 + 0.3 * (double)q;
+          y[1] = x[1] - (r == 1 ? 0.8 : 0.0) + 0.01 * test_unit(&state);
+          y[2] = x[2] - (r == 0 ? 0.8 : 0.0) + 0.01 * test_unit(&state);
+        }
+      }
+    }
+  }
+  if (e != s->n) abort();
+  if (radii) {
+    for (int64_t k = 0; k < s->n; k++) s->radii[k] = 0.15 + 0.35 * test_unit(&state);
+  }
+  for (int64_t k = s->n - 1; k > 0; k--) {
+    const int64_t o = (int64_t)(test_unit(&state) * (double)(k + 1));
+    for (int a = 0; a < 3; a++) {
+      const double t = s->coords[3 * k + a];
+      s->coords[3 * k + a] = s->coords[3 * o + a];
+      s->coords[3 * o + a] = t;
+    }
+    if (radii) {
+      const double t = s->radii[k];
+      s->radii[k] = s->radii[o];
+      s->radii[o] = t;
+    }
+  }
+}
+
+/* cellsort on a scene of short rows: the contacts of direct, candidates a superset of them,
+ * the same bytes through a callback, max_pairs kept. */
+static void check_short_rows(const scene *s, const char *label) {
+  nbs_context *ctx;
+  ASSERT_OK(nbs_context_create(NULL, &ctx));
+  pair_list ref, got, cand, raw, viacb;
+  ASSERT_OK(detect_sorted(ctx, s, NBS_DIRECT, NBS_MODE_CONTACTS, &ref));
+  CHECK_MSG(ref.count > (size_t)s->n / 2, "%s: only %zu contacts", label, ref.count);
+  ASSERT_OK(detect_sorted(ctx, s, NBS_CELLSORT, NBS_MODE_CONTACTS, &got));
+  CHECK_MSG(pair_lists_equal(&got, &ref), "%s: cellsort finds %zu contacts, direct %zu", label,
+            got.count, ref.count);
+  ASSERT_OK(detect_sorted(ctx, s, NBS_CELLSORT, NBS_MODE_CANDIDATES, &cand));
+  CHECK_MSG(well_formed(&cand, s->n) && pair_list_contains(&cand, &ref),
+            "%s: the candidates repeat a pair or miss a contact", label);
+  ASSERT_OK(detect_raw(ctx, s, NBS_CELLSORT, NBS_MODE_CONTACTS, &raw));
+  ASSERT_OK(detect_callback(ctx, s, NBS_CELLSORT, NBS_MODE_CONTACTS, &viacb));
+  CHECK_MSG(pair_lists_equal(&viacb, &raw), "%s: the callback's %zu pairs differ from the buffer's %zu",
+            label, viacb.count, raw.count);
+  nbs_input in = scene_input(s);
+  nbs_detect_def def = nbs_default_detect_def();
+  def.algorithm = NBS_CELLSORT;
+  for (size_t less = 0; less <= 1; less++) {
+    nbs_context_def cdef = nbs_default_context_def();
+    cdef.max_pairs = raw.count - less;
+    nbs_context *capped;
+    ASSERT_OK(nbs_context_create(&cdef, &capped));
+    CHECK_STATUS(nbs_detect(capped, &in, &def), less ? NBS_ERR_PAIRS : NBS_OK);
+    nbs_context_destroy(capped);
+  }
+  pair_list_free(&ref);
+  pair_list_free(&got);
+  pair_list_free(&cand);
+  pair_list_free(&raw);
+  pair_list_free(&viacb);
+  nbs_context_destroy(ctx);
+}
+
+/* cellsort's rows swept element by element (short_rows_scene, short_rows3_scene, 3D also
+ * with three rows per layer): check_short_rows, with and without radii; then, large enough
+ * for threads, the same bytes for 1 to 4 threads and the contacts of NBS. */
 static void test_short_rows(void) {
   for (int radii = 0; radii <= 1; radii++) {
     scene s;
     short_rows_scene(3000, radii, 31 + (uint64_t)radii, &s);
-    nbs_context *ctx;
-    ASSERT_OK(nbs_context_create(NULL, &ctx));
-    pair_list ref, got, cand, raw, viacb;
-    ASSERT_OK(detect_sorted(ctx, &s, NBS_DIRECT, NBS_MODE_CONTACTS, &ref));
-    CHECK_MSG(ref.count > (size_t)s.n / 2, "radii %d: only %zu contacts", radii, ref.count);
-    ASSERT_OK(detect_sorted(ctx, &s, NBS_CELLSORT, NBS_MODE_CONTACTS, &got));
-    CHECK_MSG(pair_lists_equal(&got, &ref), "radii %d: cellsort finds %zu contacts, direct %zu",
-              radii, got.count, ref.count);
-    ASSERT_OK(detect_sorted(ctx, &s, NBS_CELLSORT, NBS_MODE_CANDIDATES, &cand));
-    CHECK_MSG(well_formed(&cand, s.n) && pair_list_contains(&cand, &ref),
-              "radii %d: the candidates repeat a pair or miss a contact", radii);
-    ASSERT_OK(detect_raw(ctx, &s, NBS_CELLSORT, NBS_MODE_CONTACTS, &raw));
-    ASSERT_OK(detect_callback(ctx, &s, NBS_CELLSORT, NBS_MODE_CONTACTS, &viacb));
-    CHECK_MSG(pair_lists_equal(&viacb, &raw),
-              "radii %d: the callback's %zu pairs differ from the buffer's %zu", radii,
-              viacb.count, raw.count);
-    nbs_input in = scene_input(&s);
-    nbs_detect_def def = nbs_default_detect_def();
-    def.algorithm = NBS_CELLSORT;
-    for (size_t less = 0; less <= 1; less++) {
-      nbs_context_def cdef = nbs_default_context_def();
-      cdef.max_pairs = raw.count - less;
-      nbs_context *capped;
-      ASSERT_OK(nbs_context_create(&cdef, &capped));
-      CHECK_STATUS(nbs_detect(capped, &in, &def), less ? NBS_ERR_PAIRS : NBS_OK);
-      nbs_context_destroy(capped);
-    }
-    pair_list_free(&ref);
-    pair_list_free(&got);
-    pair_list_free(&cand);
-    pair_list_free(&raw);
-    pair_list_free(&viacb);
-    nbs_context_destroy(ctx);
+    check_short_rows(&s, radii ? "2D, radii" : "2D");
     scene_free(&s);
+    for (int thin = 0; thin <= 1; thin++) {
+      short_rows3_scene(4000, radii, thin, 41 + (uint64_t)(2 * radii + thin), &s);
+      char label[32];
+      snprintf(label, sizeof label, "3D%s%s", thin ? ", thin" : "", radii ? ", radii" : "");
+      check_short_rows(&s, label);
+      scene_free(&s);
+    }
   }
   scene s;
   short_rows_scene(60000, false, 33, &s);
   check_cellsort_threads(&s, 4, "2D short rows", -1);
   scene_free(&s);
+  for (int thin = 0; thin <= 1; thin++) {
+    short_rows3_scene(60000, false, thin, 45 + (uint64_t)thin, &s);
+    check_cellsort_threads(&s, 4, thin ? "3D short rows, thin" : "3D short rows", -1);
+    scene_free(&s);
+  }
 }
 
 /* More outliers than far elements: the core box's face cuts through the tail. */
