@@ -66,7 +66,16 @@
  *      one element to the next (nbs__cs_sweep2_body): a sparse domain's rows hold an element
  *      or two, and by blocks each row waited on finding its end, the row below and its
  *      windows (2D huge domain, N = 1e6, one thread, interleaved, min of 5: 23.8 -> 18.8 ns
- *      per element; uniform, whose rows are long, 15.7 and 15.8).
+ *      per element; uniform, whose rows are long, 15.7 and 15.8). So too in 3D a row of
+ *      fewer than 4, the three rows of the layer below found from one cursor, and with
+ *      AVX-512 the candidates picked from sixteen keys each side at once (nbs__cs_sweep3_body;
+ *      uniform scenes of mean spacing S diameters, one thread, interleaved, medians of 4,
+ *      search in ns per element, blocks / rows of fewer than 3 with the windows' edges
+ *      counted / the picks and rows of fewer than 4: N = 1e5 (the benchmarks' density
+ *      sweep) S = 5 29.1 / 24.5 / 19.5, S = 10 38.4 / 23.0 / 18.8, S = 20 24.5 / 15.5 / 15.2,
+ *      S = 50 11.2 / 8.9 / 10.0; N = 1e6, S = 10 38.1 / 26.2 / 20.1, S = 20 33.6 / 21.1 /
+ *      19.0; huge domain, minima of 5, 11.1 / 9.1 / 10.1; S = 5 at N = 1e6, the sparse scene
+ *      (fraction 0.005), uniform and clustered the same within noise).
  *      An AVX2 kernel (two registers of 4 lanes, and a table of permutations for the
  *      compress that AVX2 lacks) serves processors without AVX-512, and a generic kernel in
  *      plain C any other; all three give the same bytes in the same order (3D, N = 1e6, on
@@ -1393,6 +1402,52 @@ static inline NBS__CS_AVX2_TARGET int32_t nbs__cs_upto256(const uint64_t *key, u
     } while (nbs__step == NBS__CS_PAD);                                                       \
   } while (0)
 
+/* Pickers: to list[t ..], the places from + i (i < 16, in order) whose keys key[from + i]
+ * lie in a row of [rlo, rlo + rspan] (the key's bits from kx on) and at an x sub-cell of
+ * [xl, xl + xspan] (its bits from ks on, masked by mx); return t + how many. A 3D short
+ * row's element takes its candidates so with AVX-512 (nbs__cs_sweep3_body); the plain one
+ * serves the other sweeps' signature, which never call it. The list has room for sixteen
+ * places past t (the vector store writes them all). */
+typedef int32_t (*nbs__cs_pick_fn)(const uint64_t *key, int32_t from, int kx, int ks,
+                                   uint64_t mx, uint64_t rlo, uint64_t rspan, uint64_t xl,
+                                   uint64_t xspan, int32_t *list, int32_t t);
+
+static inline int32_t nbs__cs_pick(const uint64_t *key, int32_t from, int kx, int ks,
+                                   uint64_t mx, uint64_t rlo, uint64_t rspan, uint64_t xl,
+                                   uint64_t xspan, int32_t *list, int32_t t) {
+  for (int i = 0; i < NBS__CS_PAD; i++) {
+    const uint64_t k = key[from + i];
+    list[t] = from + i;
+    t += ((k >> kx) - rlo <= rspan) & (((k >> ks) & mx) - xl <= xspan);
+  }
+  return t;
+}
+#if NBS__CS_AVX512
+static inline NBS__CS_AVX512_TARGET int32_t nbs__cs_pick512(const uint64_t *key, int32_t from,
+                                                            int kx, int ks, uint64_t mx,
+                                                            uint64_t rlo, uint64_t rspan,
+                                                            uint64_t xl, uint64_t xspan,
+                                                            int32_t *list, int32_t t) {
+  const __m128i sr = _mm_cvtsi32_si128(kx), sx = _mm_cvtsi32_si128(ks);
+  const __m512i R = _mm512_set1_epi64((long long)rlo), RS = _mm512_set1_epi64((long long)rspan);
+  const __m512i XL = _mm512_set1_epi64((long long)xl), XS = _mm512_set1_epi64((long long)xspan);
+  const __m512i MX = _mm512_set1_epi64((long long)mx);
+  unsigned m = 0;
+  for (int h = 0; h < 2; h++) {
+    const __m512i k = _mm512_loadu_si512((const void *)(key + from + 8 * h));
+    const __mmask8 in_row = _mm512_cmple_epu64_mask(_mm512_sub_epi64(_mm512_srl_epi64(k, sr), R), RS);
+    const __m512i xk = _mm512_and_si512(_mm512_srl_epi64(k, sx), MX);
+    const __mmask8 in_x = _mm512_mask_cmple_epu64_mask(in_row, _mm512_sub_epi64(xk, XL), XS);
+    m |= (unsigned)in_x << (8 * h);
+  }
+  if (!m) return t; /* the most common case in a sparse domain, and predicted so */
+  const __m512i iota = _mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0);
+  const __m512i at = _mm512_add_epi32(iota, _mm512_set1_epi32(from));
+  _mm512_storeu_si512((void *)(list + t), _mm512_maskz_compress_epi32((__mmask16)m, at));
+  return t + __builtin_popcount(m);
+}
+#endif
+
 /* The lower bound of `k` in key[0, hi). */
 static int32_t nbs__cs_lower(const uint64_t *key, int32_t hi, uint64_t k) {
   int32_t lo = 0;
@@ -1504,7 +1559,7 @@ nbs__cs_row_blocks(const nbs__cs *c, nbs__sink *s, int32_t row_a, int32_t a, int
 
 /* A 3D row of fewer elements than this is swept element by element (nbs__cs_sweep3_body);
  * at most NBS__CS_PAD + 1, for the padding after the keys. */
-#define NBS__CS_SHORT3 3
+#define NBS__CS_SHORT3 4
 
 /* 3D: sweeps the places [from, to) of the cell order (from and to at rows' starts or at
  * blocks of a long row: nbs__cs_thread_start), with the four neighbouring rows of the half
@@ -1512,19 +1567,28 @@ nbs__cs_row_blocks(const nbs__cs *c, nbs__sink *s, int32_t row_a, int32_t a, int
  * A row of NBS__CS_SHORT3 elements or more is swept by its blocks (nbs__cs_row_blocks). A
  * shorter one, element by element, as in 2D (nbs__cs_sweep2_body): element p meets the
  * elements before it in its own row within one cell edge in x, those of the row before it
- * in its layer within one edge either side (both among the sixteen keys before p, counted
- * at once, or found by search further back), and those of the three rows of the layer
- * below, (y - 1 .. y + 1, z - 1), within one edge either side. Those three rows are
- * consecutive in key order, so one cursor, moved forwards to the first key from the start
- * of row (y - 1, z - 1) on, and counts of the sixteen keys from it find all three windows
- * (a search from the cursor where they reach further). Nothing else is carried from one
- * element to the next.
- * Why: in a sparse domain most rows hold an element or two, and a row swept by blocks
- * waited on finding its end, the cursor of each of its four neighbouring rows and each
- * row's window, one after the other, and most of those rows were empty. */
+ * in its layer within one edge either side (both among the sixteen keys before p, or found
+ * by search further back), and those of the three rows of the layer below, (y - 1 .. y + 1,
+ * z - 1), within one edge either side. Those three rows are consecutive in key order, so
+ * one cursor, moved forwards to the first key from the start of row (y - 1, z - 1) on,
+ * finds all three windows among the sixteen keys from it (a search from the cursor where
+ * they reach further). Nothing else is carried from one element to the next. Where both
+ * sides lie among their sixteen keys, the AVX-512 sweep picks the keys in the windows from
+ * each sixteen at once, their row and their x tested side by side, and compresses their
+ * places into the kernel's list (nbs__cs_pick512); the other sweeps count each window's
+ * edges among those keys (below, upto), as the AVX-512 one does elsewhere.
+ * Why: in a sparse domain most rows hold a few elements, and a row swept by blocks waited
+ * on finding its end, the cursor of each of its four neighbouring rows and each row's
+ * window, one after the other, and most of those rows were empty; and a block's windows
+ * span all its elements' x, most of a sparse row, so the kernel met elements out of reach
+ * of every lane. Measured: see the file's comment, step 4. Rows of 4 or more stay with
+ * blocks: from 5, 6 or 8 the benchmarks' sparse scene (fraction 0.005, rows of about 4.5
+ * elements) was no faster, from 8 slower (search 18.8 -> 21.1 ns per element); and with
+ * the windows' edges counted, not picked, so too from 4 (18.8 / 19.3) and 6 (19 -> 31). */
 static inline __attribute__((always_inline)) nbs_status
 nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
-                    nbs__cs_count_fn below, nbs__cs_count_fn upto, bool listed) {
+                    nbs__cs_count_fn below, nbs__cs_count_fn upto, nbs__cs_pick_fn pick,
+                    bool listed) {
   nbs_status st = NBS_OK;
   const uint64_t *key = c->key;
   const int bx = c->bx, by = c->by, ks = c->ks, kx = bx + ks;
@@ -1656,31 +1720,69 @@ nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
     }
     const uint64_t x = k & mx;
     const uint64_t xl = x > fine ? x - fine : 0, xh = mx - x > fine ? x + fine : mx;
-    nbs__cs_ranges rg;
-    rg.count = 0;
-    rg.places = -1;
-    /* the layer below: rows y - 1 .. y + 1 of z - 1 where they exist, their windows
-     * [lo, hi] of words, found from the cursor at the first key from the first window's lo
-     * on */
+    /* The layer below: rows y0 = y - 1 .. y1 = y + 1 of z - 1 where they exist, their
+     * windows x - fine .. x + fine, found from the cursor at the first key from row y0's
+     * start on (not from its window's: where y0 is the row's own y, y = 0, the window of a
+     * later element of the layer's next row starts further back in that row). */
+    const int64_t y0 = iy >= 1 ? iy - 1 : iy, y1 = iy + 1 < ny ? iy + 1 : iy;
+    const uint64_t lrow = (uint64_t)(iz - 1) << by;
+    const uint64_t hi1 = ((lrow | (uint64_t)y1) << bx | xh) << ks | low;
+    int32_t q = p;
     if (iz >= 1) {
-      const int64_t y0 = iy >= 1 ? iy - 1 : iy, y1 = iy + 1 < ny ? iy + 1 : iy;
-      const uint64_t lrow = (uint64_t)(iz - 1) << by;
-      /* the cursor: the first place from row y0's start on, not from its window's (lo0):
-       * where y0 is the row's own y (y = 0), the window of a later element of the layer's
-       * next row starts further back in that row */
       const uint64_t r0 = (lrow | (uint64_t)y0) << bx << ks;
-      int32_t q = sc;
+      q = sc;
       if (q < 0) q = nbs__cs_lower(key, p, r0);
       NBS__CS_ADVANCE(key, q, below, r0); /* stops at p at the latest */
       sc = q;
       /* the rows below of a long row to come lie at or after it: its cursors */
       cur[0] = cur[1] = cur[2] = q;
       lq1 = -1;
-      const uint64_t hi1 = ((lrow | (uint64_t)y1) << bx | xh) << ks | low;
-      /* the first key from the first window on past the last: all three are empty */
-      const int32_t in = key[q] > hi1 ? 0 : upto(key + q, hi1);
-      const bool near = in < NBS__CS_PAD;
-      for (int64_t y = y0; y <= y1 && in > 0; y++) {
+    }
+    /* anything from the first window on up to the last (below: key[q] is p's, in the
+     * layer, past hi1, where there is no layer below), and all of it among the sixteen keys
+     * from q */
+    const bool down = iz >= 1 && key[q] <= hi1;
+    const bool down_near = iz < 1 || key[q + NBS__CS_PAD - 1] > hi1;
+    /* The layer's own rows: the row before (y - 1), x - fine .. x + fine (a word above `hb`
+     * is past it), and the own row from x - fine on; anything in reach (the key before p),
+     * and all of it among the sixteen keys before p. */
+    const uint64_t own = (row << bx | xl) << ks;
+    const uint64_t lb = ((row - 1) << bx | xl) << ks, hb = ((row - 1) << bx | xh) << ks | low;
+    const uint64_t first_in = iy >= 1 ? lb : own;
+    const bool back = p > 0 && key[p - 1] >= first_in;
+    if (!down && !back) {
+      p++;
+      continue;
+    }
+    nbs__cs_ranges rg;
+    rg.count = 0;
+    rg.places = -1;
+    rg.list = list;
+    if (listed && down_near && p >= NBS__CS_PAD && key[p - NBS__CS_PAD] < first_in &&
+        s->cap - s->count >= 2 * NBS__CS_PAD + 1 + NBS__CS_LANES) {
+      /* With AVX-512 (listed), where all of it lies among those sixteen keys each side: the
+       * places of the keys in the windows, picked from each sixteen at once (their row in
+       * range, their x in the window), in key order, the list the kernel loops over; the
+       * one range that holds p tells the kernel where the element is (the same pairs in
+       * the same order as from the ranges, below). */
+      int32_t places = 0;
+      if (down) places = pick(key, q, kx, ks, mx, lrow | (uint64_t)y0, (uint64_t)(y1 - y0), xl,
+                              xh - xl, list, places);
+      if (back) places = pick(key, p - NBS__CS_PAD, kx, ks, mx, iy >= 1 ? row - 1 : row,
+                              iy >= 1 ? 1 : 0, xl, xh - xl, list, places);
+      if (places > 0) {
+        rg.places = places;
+        rg.q0[0] = p;
+        rg.q1[0] = p + 1;
+        rg.count = 1;
+        st = nbs__cs_offer(c, s, p, 1, &rg);
+      }
+      p++;
+      continue;
+    }
+    if (down) {
+      const bool near = down_near;
+      for (int64_t y = y0; y <= y1; y++) {
         const uint64_t lo = ((lrow | (uint64_t)y) << bx | xl) << ks;
         const uint64_t hi = ((lrow | (uint64_t)y) << bx | xh) << ks | low;
         int32_t e0, e1;
@@ -1698,23 +1800,18 @@ nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
         rg.count += e1 > e0;
       }
     }
-    /* the layer's own rows: the row before (y - 1), x - fine .. x + fine (a word above `hb`
-     * is past it), and the own row from x - fine on. The places before p: from p - c1 on,
-     * keys from lb on; from p - c2, above hb; from p - c3, in reach in the own row (c1 >=
-     * c2 >= c3: lb <= hb < own) */
-    const uint64_t own = (row << bx | xl) << ks;
-    const uint64_t lb = ((row - 1) << bx | xl) << ks, hb = ((row - 1) << bx | xh) << ks | low;
+    /* The places before p: from p - c1 on, keys from lb on; from p - c2, above hb; from
+     * p - c3, in reach in the own row (c1 >= c2 >= c3: lb <= hb < own) */
     int32_t c1, c2, c3;
-    if (p == 0 || key[p - 1] < (iy >= 1 ? lb : own)) {
-      /* the key before p is before both: nothing in reach in the layer */
+    if (!back) {
       c1 = c2 = c3 = 0;
     } else if (p >= NBS__CS_PAD) {
-      const uint64_t *back = key + p - NBS__CS_PAD;
-      c3 = NBS__CS_PAD - below(back, own);
+      const uint64_t *kb = key + p - NBS__CS_PAD;
+      c3 = NBS__CS_PAD - below(kb, own);
       c1 = c2 = c3;
       if (iy >= 1) {
-        c1 = NBS__CS_PAD - below(back, lb);
-        c2 = NBS__CS_PAD - upto(back, hb);
+        c1 = NBS__CS_PAD - below(kb, lb);
+        c2 = NBS__CS_PAD - upto(kb, hb);
       }
     } else {
       c1 = NBS__CS_PAD; /* the search below */
@@ -1742,7 +1839,6 @@ nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
           places = nbs__cs_list(list, places, rg.q0[r], r == rg.count - 1 ? p : rg.q1[r]);
         }
         rg.places = places;
-        rg.list = list;
       }
       st = nbs__cs_offer(c, s, p, 1, &rg);
     }
@@ -1871,10 +1967,11 @@ nbs__cs_sweep2_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
 /* The sweep of the places [from, to) of the cell order, into `out`: 2D or 3D. */
 static inline __attribute__((always_inline)) nbs_status
 nbs__cs_sweep_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
-                   nbs__cs_count_fn below, nbs__cs_count_fn upto, bool listed) {
+                   nbs__cs_count_fn below, nbs__cs_count_fn upto, nbs__cs_pick_fn pick,
+                   bool listed) {
   nbs__sink local = *out; /* kept in registers, written back at the end */
   const nbs_status st = c->dim == 2 ? nbs__cs_sweep2_body(c, &local, from, to, below, upto, listed)
-                                    : nbs__cs_sweep3_body(c, &local, from, to, below, upto, listed);
+                                    : nbs__cs_sweep3_body(c, &local, from, to, below, upto, pick, listed);
   *out = local;
   return st;
 }
@@ -1884,16 +1981,18 @@ nbs__cs_sweep_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
  * them); for AVX-512, the ranges' places listed (`listed`, see nbs__cs_ranges). */
 static nbs_status nbs__cs_sweep_generic(const nbs__cs *c, nbs__sink *out, int32_t from,
                                         int32_t to) {
-  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below, nbs__cs_upto, false);
+  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below, nbs__cs_upto, nbs__cs_pick, false);
 }
 #if NBS__CS_AVX512
 NBS__CS_AVX512_TARGET NBS__CS_HOT
 static nbs_status nbs__cs_sweep_avx512(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to) {
-  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below512, nbs__cs_upto512, true);
+  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below512, nbs__cs_upto512, nbs__cs_pick512,
+                            true);
 }
 NBS__CS_AVX2_TARGET
 static nbs_status nbs__cs_sweep_avx2(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to) {
-  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below256, nbs__cs_upto256, false);
+  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below256, nbs__cs_upto256, nbs__cs_pick,
+                            false);
 }
 #endif
 
