@@ -1459,6 +1459,48 @@ static int32_t nbs__cs_lower(const uint64_t *key, int32_t hi, uint64_t k) {
   return lo;
 }
 
+/* The sweep's own rows at place q, asked for ahead of their use (see nbs__cs_row_blocks):
+ * the key, the coordinates, the radius and (unpacked keys) the element. */
+static inline __attribute__((always_inline)) void nbs__cs_ask_own(const nbs__cs *c, int32_t q) {
+  __builtin_prefetch(c->key + q);
+  __builtin_prefetch(c->xs + q);
+  __builtin_prefetch(c->ys + q);
+  if (c->dim == 3) __builtin_prefetch(c->zs + q);
+  if (c->rs) __builtin_prefetch(c->rs + q);
+  if (c->istep == 1) __builtin_prefetch(c->ids + q); /* unpacked keys */
+}
+
+/* A short row's element p (2D and 3D, swept element by element): how many of the places
+ * just before p hold keys from lb on (*c1), above hb (*c2), and from own on (*c3): the row
+ * before it in its layer (2D: the row below), x - fine .. x + fine (lb .. hb, where `before`
+ * says there is such a row), and its own row from x - fine on (own); c1 >= c2 >= c3. Counted
+ * among the sixteen keys before p, or found by search where those are all in reach or p
+ * has fewer before it. */
+static inline __attribute__((always_inline)) void
+nbs__cs_back(const uint64_t *key, int32_t p, uint64_t own, uint64_t lb, uint64_t hb,
+             bool before, nbs__cs_count_fn below, nbs__cs_count_fn upto, int32_t *c1,
+             int32_t *c2, int32_t *c3) {
+  if (p >= NBS__CS_PAD) {
+    const uint64_t *kb = key + p - NBS__CS_PAD;
+    *c3 = NBS__CS_PAD - below(kb, own);
+    *c1 = *c2 = *c3;
+    if (before) {
+      *c1 = NBS__CS_PAD - below(kb, lb);
+      *c2 = NBS__CS_PAD - upto(kb, hb);
+    }
+  } else {
+    *c1 = NBS__CS_PAD; /* the search below */
+  }
+  if (*c1 == NBS__CS_PAD) {
+    *c3 = p - nbs__cs_lower(key, p, own);
+    *c1 = *c2 = *c3;
+    if (before) {
+      *c1 = p - nbs__cs_lower(key, p, lb);
+      *c2 = p - nbs__cs_lower(key, p, hb + 1); /* hb < own: no overflow */
+    }
+  }
+}
+
 /* The blocks of the row [a, b) of the cell order, a row that starts at row_a <= a (a is
  * row_a, or a block of the row where a thread's range starts; see nbs__cs_thread_start).
  * Each row is cut into blocks of NBS__CS_LANES consecutive elements. A block meets itself,
@@ -1480,7 +1522,6 @@ static inline __attribute__((always_inline)) nbs_status
 nbs__cs_row_blocks(const nbs__cs *c, nbs__sink *s, int32_t row_a, int32_t a, int32_t b,
                    int rows, const uint64_t *base, int32_t *q0, int32_t *q1,
                    nbs__cs_count_fn below, nbs__cs_count_fn upto, bool listed) {
-  const int dim = c->dim;
   /* key[q] >> ks is element q's key; a bound b on keys is b << ks on the words (below), or
    * b << ks | low (up to) */
   const uint64_t *key = c->key;
@@ -1499,13 +1540,7 @@ nbs__cs_row_blocks(const nbs__cs *c, nbs__sink *s, int32_t row_a, int32_t a, int
      * prefetchers, following some twenty streams, did not do as well (3D, N = 1e6, one
      * thread: sweep 19.8 -> 18.2 ns per element; 1e7: 21.9 -> 18.9; 2D 1e6: 7.2 -> 6.3;
      * asking for the windows' streams too gained nothing). */
-    const int32_t ahead = c0 + NBS__CS_SWEEP_AHEAD < c->n ? c0 + NBS__CS_SWEEP_AHEAD : c0;
-    __builtin_prefetch(key + ahead);
-    __builtin_prefetch(c->xs + ahead);
-    __builtin_prefetch(c->ys + ahead);
-    if (dim == 3) __builtin_prefetch(c->zs + ahead);
-    if (c->rs) __builtin_prefetch(c->rs + ahead);
-    if (c->istep == 1) __builtin_prefetch(c->ids + ahead); /* unpacked keys */
+    nbs__cs_ask_own(c, c0 + NBS__CS_SWEEP_AHEAD < c->n ? c0 + NBS__CS_SWEEP_AHEAD : c0);
     const uint64_t k0 = key[c0] >> ks;
     const uint64_t fa = k0 & mx, fb = (key[c0 + lanes - 1] >> ks) & mx;
     nbs__cs_ranges rg;
@@ -1711,12 +1746,7 @@ nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
     prev_row = first ? row : prev_row;
     prev_a = first ? p : prev_a;
     if ((p & (NBS__CS_LANES - 1)) == 0 && p + NBS__CS_SWEEP_AHEAD < c->n) {
-      __builtin_prefetch(key + p + NBS__CS_SWEEP_AHEAD);
-      __builtin_prefetch(c->xs + p + NBS__CS_SWEEP_AHEAD);
-      __builtin_prefetch(c->ys + p + NBS__CS_SWEEP_AHEAD);
-      __builtin_prefetch(c->zs + p + NBS__CS_SWEEP_AHEAD);
-      if (c->rs) __builtin_prefetch(c->rs + p + NBS__CS_SWEEP_AHEAD);
-      if (c->istep == 1) __builtin_prefetch(c->ids + p + NBS__CS_SWEEP_AHEAD);
+      nbs__cs_ask_own(c, p + NBS__CS_SWEEP_AHEAD);
     }
     const uint64_t x = k & mx;
     const uint64_t xl = x > fine ? x - fine : 0, xh = mx - x > fine ? x + fine : mx;
@@ -1802,29 +1832,8 @@ nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
     }
     /* The places before p: from p - c1 on, keys from lb on; from p - c2, above hb; from
      * p - c3, in reach in the own row (c1 >= c2 >= c3: lb <= hb < own) */
-    int32_t c1, c2, c3;
-    if (!back) {
-      c1 = c2 = c3 = 0;
-    } else if (p >= NBS__CS_PAD) {
-      const uint64_t *kb = key + p - NBS__CS_PAD;
-      c3 = NBS__CS_PAD - below(kb, own);
-      c1 = c2 = c3;
-      if (iy >= 1) {
-        c1 = NBS__CS_PAD - below(kb, lb);
-        c2 = NBS__CS_PAD - upto(kb, hb);
-      }
-    } else {
-      c1 = NBS__CS_PAD; /* the search below */
-    }
-    if (c1 == NBS__CS_PAD) {
-      /* as many keys in reach as were counted, or too few keys before p: search */
-      c3 = p - nbs__cs_lower(key, p, own);
-      c1 = c2 = c3;
-      if (iy >= 1) {
-        c1 = p - nbs__cs_lower(key, p, lb);
-        c2 = p - nbs__cs_lower(key, p, hb + 1); /* hb < own: no overflow */
-      }
-    }
+    int32_t c1 = 0, c2 = 0, c3 = 0;
+    if (back) nbs__cs_back(key, p, own, lb, hb, iy >= 1, below, upto, &c1, &c2, &c3);
     rg.q0[rg.count] = p - c1;
     rg.q1[rg.count] = p - c2;
     rg.count += c1 > c2;
@@ -1914,11 +1923,7 @@ nbs__cs_sweep2_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
     last_row = first ? row : last_row;
     last_a = first ? p : last_a;
     if ((p & (NBS__CS_LANES - 1)) == 0 && p + NBS__CS_SWEEP_AHEAD < c->n) {
-      __builtin_prefetch(key + p + NBS__CS_SWEEP_AHEAD);
-      __builtin_prefetch(c->xs + p + NBS__CS_SWEEP_AHEAD);
-      __builtin_prefetch(c->ys + p + NBS__CS_SWEEP_AHEAD);
-      if (c->rs) __builtin_prefetch(c->rs + p + NBS__CS_SWEEP_AHEAD);
-      if (c->istep == 1) __builtin_prefetch(c->ids + p + NBS__CS_SWEEP_AHEAD);
+      nbs__cs_ask_own(c, p + NBS__CS_SWEEP_AHEAD);
     }
     /* bounds on the words: the own row from x - fine on; the row below, x - fine .. x +
      * fine (a word above `hb` is past it) */
@@ -1928,26 +1933,7 @@ nbs__cs_sweep2_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
     /* the places before p: from p - c1 on, keys from lb on; from p - c2, above hb; from
      * p - c3, in reach in the own row (c1 >= c2 >= c3: lb <= hb < own) */
     int32_t c1, c2, c3;
-    if (p >= NBS__CS_PAD) {
-      const uint64_t *back = key + p - NBS__CS_PAD;
-      c3 = NBS__CS_PAD - below(back, own);
-      c1 = c2 = c3;
-      if (row > 0) {
-        c1 = NBS__CS_PAD - below(back, lb);
-        c2 = NBS__CS_PAD - upto(back, hb);
-      }
-    } else {
-      c1 = NBS__CS_PAD; /* the search below */
-    }
-    if (c1 == NBS__CS_PAD) {
-      /* as many keys in reach as were counted, or too few keys before p: search */
-      c3 = p - nbs__cs_lower(key, p, own);
-      c1 = c2 = c3;
-      if (row > 0) {
-        c1 = p - nbs__cs_lower(key, p, lb);
-        c2 = p - nbs__cs_lower(key, p, hb + 1); /* hb < 2^63: a 2D key has 63 bits */
-      }
-    }
+    nbs__cs_back(key, p, own, lb, hb, row > 0, below, upto, &c1, &c2, &c3);
     if (c1 > c2 || c3 > 0) {
       nbs__cs_ranges rg;
       rg.q0[0] = p - c1;
