@@ -1402,26 +1402,15 @@ static inline NBS__CS_AVX2_TARGET int32_t nbs__cs_upto256(const uint64_t *key, u
     } while (nbs__step == NBS__CS_PAD);                                                       \
   } while (0)
 
-/* Pickers: to list[t ..], the places from + i (i < 16, in order) whose keys key[from + i]
+/* A picker: to list[t ..], the places from + i (i < 16, in order) whose keys key[from + i]
  * lie in a row of [rlo, rlo + rspan] (the key's bits from kx on) and at an x sub-cell of
- * [xl, xl + xspan] (its bits from ks on, masked by mx); return t + how many. A 3D short
- * row's element takes its candidates so with AVX-512 (nbs__cs_sweep3_body); the plain one
- * serves the other sweeps' signature, which never call it. The list has room for sixteen
- * places past t (the vector store writes them all). */
+ * [xl, xl + xspan] (its bits from ks on, masked by mx); returns t + how many. A 3D short
+ * row's element takes its candidates so with AVX-512 (nbs__cs_sweep3_body: the sweeps of
+ * the other kernels, whose kernels loop over ranges, not lists, pass NULL and never call
+ * it). The list has room for sixteen places past t (the vector store writes them all). */
 typedef int32_t (*nbs__cs_pick_fn)(const uint64_t *key, int32_t from, int kx, int ks,
                                    uint64_t mx, uint64_t rlo, uint64_t rspan, uint64_t xl,
                                    uint64_t xspan, int32_t *list, int32_t t);
-
-static inline int32_t nbs__cs_pick(const uint64_t *key, int32_t from, int kx, int ks,
-                                   uint64_t mx, uint64_t rlo, uint64_t rspan, uint64_t xl,
-                                   uint64_t xspan, int32_t *list, int32_t t) {
-  for (int i = 0; i < NBS__CS_PAD; i++) {
-    const uint64_t k = key[from + i];
-    list[t] = from + i;
-    t += ((k >> kx) - rlo <= rspan) & (((k >> ks) & mx) - xl <= xspan);
-  }
-  return t;
-}
 #if NBS__CS_AVX512
 static inline NBS__CS_AVX512_TARGET int32_t nbs__cs_pick512(const uint64_t *key, int32_t from,
                                                             int kx, int ks, uint64_t mx,
@@ -1788,7 +1777,7 @@ nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
     rg.count = 0;
     rg.places = -1;
     rg.list = list;
-    if (listed && down_near && p >= NBS__CS_PAD && key[p - NBS__CS_PAD] < first_in &&
+    if (listed && pick && down_near && p >= NBS__CS_PAD && key[p - NBS__CS_PAD] < first_in &&
         s->cap - s->count >= 2 * NBS__CS_PAD + 1 + NBS__CS_LANES) {
       /* With AVX-512 (listed), where all of it lies among those sixteen keys each side: the
        * places of the keys in the windows, picked from each sixteen at once (their row in
@@ -1967,7 +1956,7 @@ nbs__cs_sweep_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
  * them); for AVX-512, the ranges' places listed (`listed`, see nbs__cs_ranges). */
 static nbs_status nbs__cs_sweep_generic(const nbs__cs *c, nbs__sink *out, int32_t from,
                                         int32_t to) {
-  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below, nbs__cs_upto, nbs__cs_pick, false);
+  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below, nbs__cs_upto, NULL, false);
 }
 #if NBS__CS_AVX512
 NBS__CS_AVX512_TARGET NBS__CS_HOT
@@ -1977,8 +1966,7 @@ static nbs_status nbs__cs_sweep_avx512(const nbs__cs *c, nbs__sink *out, int32_t
 }
 NBS__CS_AVX2_TARGET
 static nbs_status nbs__cs_sweep_avx2(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to) {
-  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below256, nbs__cs_upto256, nbs__cs_pick,
-                            false);
+  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below256, nbs__cs_upto256, NULL, false);
 }
 #endif
 

@@ -406,6 +406,25 @@ static void test_bucket_scratch(void) {
   scene_free(&s);
 }
 
+/* The elements of s shuffled (coordinates and radii together), one draw of state each from
+ * the last down (Fisher-Yates). */
+static void shuffle_scene(scene *s, uint64_t *state) {
+  const int dim = s->dim;
+  for (int64_t k = s->n - 1; k > 0; k--) {
+    const int64_t o = (int64_t)(test_unit(state) * (double)(k + 1));
+    for (int a = 0; a < dim; a++) {
+      const double t = s->coords[k * dim + a];
+      s->coords[k * dim + a] = s->coords[o * dim + a];
+      s->coords[o * dim + a] = t;
+    }
+    if (s->radii) {
+      const double t = s->radii[k];
+      s->radii[k] = s->radii[o];
+      s->radii[o] = t;
+    }
+  }
+}
+
 /* cellsort's crowded core (nbs__cs_core), where its box cuts through a crowd: 90% of the
  * elements in a block [0, bx] x [0, h]^(dim - 1) at the fraction f, 9% in a tail before it
  * on x, [-tx, 0], at half that fraction, and 1% far out in pairs that touch, at +-far_yz on
@@ -441,14 +460,7 @@ static int64_t core_scene(int dim, int64_t n, double f, double h, double far_x, 
       x[0] += 0.6; /* touching the one before */
     }
   }
-  for (int64_t e = n - 1; e > 0; e--) {
-    const int64_t o = (int64_t)(test_unit(&state) * (double)(e + 1));
-    for (int a = 0; a < dim; a++) {
-      const double t = s->coords[e * dim + a];
-      s->coords[e * dim + a] = s->coords[o * dim + a];
-      s->coords[o * dim + a] = t;
-    }
-  }
+  shuffle_scene(s, &state);
   return n - block - tail;
 }
 
@@ -490,19 +502,7 @@ static void short_rows_scene(int64_t chain, bool radii, uint64_t seed, scene *s)
   if (radii) {
     for (int64_t k = 0; k < s->n; k++) s->radii[k] = 0.15 + 0.35 * test_unit(&state);
   }
-  for (int64_t k = s->n - 1; k > 0; k--) {
-    const int64_t o = (int64_t)(test_unit(&state) * (double)(k + 1));
-    for (int a = 0; a < 2; a++) {
-      const double t = s->coords[2 * k + a];
-      s->coords[2 * k + a] = s->coords[2 * o + a];
-      s->coords[2 * o + a] = t;
-    }
-    if (radii) {
-      const double t = s->radii[k];
-      s->radii[k] = s->radii[o];
-      s->radii[o] = t;
-    }
-  }
+  shuffle_scene(s, &state);
 }
 
 /* 3D rows of one to three elements, in every relation the sweep meets element by element
@@ -562,19 +562,7 @@ static void short_rows3_scene(int64_t chain, bool radii, bool thin, uint64_t see
   if (radii) {
     for (int64_t k = 0; k < s->n; k++) s->radii[k] = 0.15 + 0.35 * test_unit(&state);
   }
-  for (int64_t k = s->n - 1; k > 0; k--) {
-    const int64_t o = (int64_t)(test_unit(&state) * (double)(k + 1));
-    for (int a = 0; a < 3; a++) {
-      const double t = s->coords[3 * k + a];
-      s->coords[3 * k + a] = s->coords[3 * o + a];
-      s->coords[3 * o + a] = t;
-    }
-    if (radii) {
-      const double t = s->radii[k];
-      s->radii[k] = s->radii[o];
-      s->radii[o] = t;
-    }
-  }
+  shuffle_scene(s, &state);
 }
 
 /* cellsort on a scene of short rows: the contacts of direct, candidates a superset of them,
