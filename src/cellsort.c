@@ -125,8 +125,14 @@
  * 1e-3: 18.7 -> 15.4. N = 1e7, 3D at 1e-3: 36.7 -> 31.4; 1e5 25.8 -> 24.3; 1e4 22.3 -> 22.5,
  * and 2D 1e4 11.0 and 10.9, where everything is in the caches. nbs__cs_warm's pass read the
  * input in the last order, at random, and computed the keys there; done as a gather then a
- * key check from the L1 cache, a chunk at a time, it was no faster (unmoved 29.4 / 29.4,
- * 1e-3 33.8 -> 35.0): the merge's moves were the cost. The first start after a sort from
+ * key check from the L1 cache, a chunk at a time, it was no faster then, in 3D uniform scenes
+ * with a plain check (unmoved 29.4 / 29.4, 1e-3 33.8 -> 35.0): the merge's moves were the
+ * cost. It now serves only keys of more than 31 bits (domains of many cells: the huge one,
+ * and 2D sparse and clustered), where it is done so with the check 8 at a time (AVX-512),
+ * and the chunk left in place where its words all stand: preparation, unmoved (interleaved,
+ * min of 4): 2D huge 5.44 -> 4.02, sparse 5.64 -> 4.01, clustered 6.02 -> 4.20, 3D huge 10.44
+ * -> 7.83, two threads 2D huge 3.08 -> 2.14; the plain check (NBS_SIMD=generic) 5.67 ->
+ * 5.42; steps of 1e-2 (3D huge) 14.41 -> 13.65. The first start after a sort from
  * scratch pays for writing the keys (a scatter, about a nanosecond per element); stored by
  * the key pass instead, they cost every detection from scratch 0.3 ns (33.1 -> 33.4, 2D
  * 19.6 -> 19.9). More than n / 16 changed keys (steps of 3e-2 here) stop either way, and the
@@ -2565,10 +2571,62 @@ static void nbs__cs_merge(const nbs__cs *c, const nbs__run *run, int32_t k, cons
 /* The warm start: at most this share (1 / it) of the elements may change place. */
 #define NBS__CS_WARM_SHARE 16
 
+/* The words of the places [from, to) of the gathered coordinates cs[] (x, y, z), keyed as
+ * nbs__cs_cellkey keys the input (the same values: copies), each with the element of the last
+ * order's word key[p], to out[0 ..]. */
+static void nbs__cs_words_at(const nbs__cs_keying *kg, const double *const cs[3], int dim,
+                             const uint64_t *key, uint64_t emask, int eb, int32_t from,
+                             int32_t to, uint64_t *out) {
+  for (int32_t p = from; p < to; p++) {
+    const double xk[3] = {cs[0][p], cs[1][p], dim == 3 ? cs[2][p] : 0.0};
+    out[p - from] = nbs__cs_cellkey(kg, xk) << eb | (key[p] & emask);
+  }
+}
+
+#if NBS__CS_AVX512
+/* The same 8 places at a time, the keys as nbs__cs_key8_of computes them (the input's
+ * coordinates are copies, side by side already: no permutation). */
+static inline __attribute__((always_inline)) NBS__CS_AVX512_TARGET void
+nbs__cs_words_at512_body(const nbs__cs_keying *kg, const double *const cs[3], int dim,
+                         const uint64_t *key, uint64_t emask, int eb, int32_t from, int32_t to,
+                         uint64_t *out) {
+  nbs__cs_keys8 v;
+  nbs__cs_keys8_init(&v, kg);
+  const __m128i sh = _mm_cvtsi32_si128(eb);
+  const __m512i em = _mm512_set1_epi64((long long)emask);
+  const double *ca[3] = {cs[kg->c[0]], cs[kg->c[1]], dim == 3 ? cs[kg->c[2]] : NULL};
+  int32_t p = from;
+  for (; to - p >= 8; p += 8) {
+    __m512d t[3];
+    for (int a = 0; a < dim; a++) {
+      t[a] = _mm512_mul_pd(_mm512_sub_pd(_mm512_loadu_pd(ca[a] + p), v.lo[a]), v.inv[a]);
+    }
+    const __m512i e = _mm512_and_si512(_mm512_loadu_si512((const void *)(key + p)), em);
+    const __m512i w = _mm512_or_si512(_mm512_sll_epi64(nbs__cs_key8_of(&v, t, dim), sh), e);
+    _mm512_storeu_si512((void *)(out + (p - from)), w);
+  }
+  nbs__cs_words_at(kg, cs, dim, key, emask, eb, p, to, out + (p - from));
+}
+
+NBS__CS_AVX512_TARGET
+static void nbs__cs_words_at512(const nbs__cs_keying *kg, const double *const cs[3], int dim,
+                                const uint64_t *key, uint64_t emask, int eb, int32_t from,
+                                int32_t to, uint64_t *out) {
+  if (dim == 3) nbs__cs_words_at512_body(kg, cs, 3, key, emask, eb, from, to, out);
+  else nbs__cs_words_at512_body(kg, cs, 2, key, emask, eb, from, to, out);
+}
+#endif
+
+/* The warm start's chunk: places a chunk of the last order at a time (NBS__CS_WARM_CHUNK),
+ * whose coordinates are then still in the L1 cache for the check of their words. */
+#define NBS__CS_WARM_CHUNK 512
+
 /* Starts from the last detection's cell order (nbs_detect's "time steps") where the words'
  * low half is not the element alone (eb < 32; else nbs__cs_rekey, below, which is faster).
- * key[] holds it as packed words, sorted, of the same n elements. One pass reads the
- * elements in that order, as the gather does, and computes each one's new word. An element
+ * key[] holds it as packed words, sorted, of the same n elements. One pass places the
+ * elements' coordinates in that order, as the gather does, a chunk at a time, and computes
+ * the chunk's new words from those copies while they are in the L1 cache (8 at a time with
+ * AVX-512); a chunk whose words all stand, before any was taken out, is done. An element
  * whose word is unchanged keeps its place: it moves down over the places of those taken out
  * before it, with its coordinates, and these words stay sorted, since they were. An element whose
  * word changed (it moved to another x sub-cell, row or layer) is taken out to `spare`.
@@ -2597,6 +2655,9 @@ static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
   const double *x = run->x, *r = run->r;
   const bool ask = nbs__cs_input_bytes(c) > NBS__CS_PREFETCH_MIN; /* see the gather */
   const bool ends = nbs__cs_ends(x, dim);
+#if NBS__CS_AVX512
+  const bool v512 = run->ctx->simd == NBS__SIMD_AVX512;
+#endif
   /* zeroed for GCC 12, which without OpenMP takes kept[0] for unset after the pass */
   int32_t kept[NBS__THREADS_MAX] = {0};
   int64_t out[NBS__THREADS_MAX];
@@ -2606,31 +2667,57 @@ static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
 #endif
   NBS__PARTS(t, threads) {
     const int32_t from = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
+    const double *const cs[3] = {xs, ys, zs};
     uint64_t *mine = spare + (size_t)t * (size_t)share;
+    uint64_t words[NBS__CS_WARM_CHUNK];
     int32_t k = from;
     int64_t m = 0;
-    for (int32_t p = from; p < to; p++) {
-      /* the gather's prefetch; key[pa] is still the last order's word, within this thread's
-       * part (the next thread's rewrites its own) */
-      if (ask) {
-        const int32_t pa = p + NBS__CS_AHEAD < to ? p + NBS__CS_AHEAD : p;
-        const int32_t pn = p + NBS__CS_NEAR < to ? p + NBS__CS_NEAR : p;
-        nbs__cs_prefetch(x, rs ? r : NULL, dim, ends, (int32_t)(key[pa] & emask),
-                         (int32_t)(key[pn] & emask));
+    for (int32_t a = from; a < to && !over; a += NBS__CS_WARM_CHUNK) {
+      const int32_t b = to - a > NBS__CS_WARM_CHUNK ? a + NBS__CS_WARM_CHUNK : to;
+      /* the chunk's coordinates, in place, as the gather places them; key[pa] is still the
+       * last order's word, within this thread's part (the next thread's rewrites its own) */
+      for (int32_t p = a; p < b; p++) {
+        if (ask) {
+          const int32_t pa = p + NBS__CS_AHEAD < to ? p + NBS__CS_AHEAD : p;
+          const int32_t pn = p + NBS__CS_NEAR < to ? p + NBS__CS_NEAR : p;
+          nbs__cs_prefetch(x, rs ? r : NULL, dim, ends, (int32_t)(key[pa] & emask),
+                           (int32_t)(key[pn] & emask));
+        }
+        nbs__cs_place(xs, ys, zs, rs, x, r, dim, p, (int32_t)(key[p] & emask));
       }
-      const uint64_t old = key[p];
-      const int32_t e = (int32_t)(old & emask);
-      const double *xk = x + (size_t)e * (size_t)dim;
-      const uint64_t w = nbs__cs_cellkey(kg, xk) << eb | (uint64_t)e;
-      if (w == old) {
-        key[k] = w;
-        nbs__cs_place(xs, ys, zs, rs, x, r, dim, k, e);
-        k++;
-      } else if (m < share) {
-        mine[m++] = w;
-      } else {
-        over = true;
-        break;
+      /* their words now */
+#if NBS__CS_AVX512
+      if (v512) {
+        nbs__cs_words_at512(kg, cs, dim, key, emask, eb, a, b, words);
+      } else
+#endif
+      {
+        nbs__cs_words_at(kg, cs, dim, key, emask, eb, a, b, words);
+      }
+      /* nothing taken out yet and the chunk unchanged: all of it stays where it is */
+      if (k == a && memcmp(words, key + a, (size_t)(b - a) * sizeof *key) == 0) {
+        k = b;
+        continue;
+      }
+      /* an element whose word is unchanged keeps its place: it moves down over the places
+       * of those taken out before it, with its coordinates */
+      for (int32_t p = a; p < b; p++) {
+        const uint64_t w = words[p - a];
+        if (w == key[p]) {
+          if (k != p) {
+            key[k] = w;
+            xs[k] = xs[p];
+            ys[k] = ys[p];
+            if (dim == 3) zs[k] = zs[p];
+            if (rs) rs[k] = rs[p];
+          }
+          k++;
+        } else if (m < share) {
+          mine[m++] = w;
+        } else {
+          over = true;
+          break;
+        }
       }
     }
     kept[t] = k - from;
