@@ -1465,16 +1465,59 @@ static inline __attribute__((always_inline)) void nbs__cs_ask_own(const nbs__cs 
   if (c->istep == 1) __builtin_prefetch(c->ids + q); /* unpacked keys */
 }
 
+/* The three counts of nbs__cs_back among the eight keys k8[0 .. 8), one load for all three:
+ * c[0] from lb on, c[1] above hb, c[2] from own on. */
+typedef void (*nbs__cs_back8_fn)(const uint64_t *k8, uint64_t own, uint64_t lb, uint64_t hb,
+                                 int32_t c[3]);
+#if NBS__CS_AVX512
+static inline NBS__CS_AVX512_TARGET void nbs__cs_back8_512(const uint64_t *k8, uint64_t own,
+                                                           uint64_t lb, uint64_t hb,
+                                                           int32_t c[3]) {
+  const __m512i k = _mm512_loadu_si512((const void *)k8);
+  c[0] = __builtin_popcount(_mm512_cmpge_epu64_mask(k, _mm512_set1_epi64((long long)lb)));
+  c[1] = __builtin_popcount(_mm512_cmpgt_epu64_mask(k, _mm512_set1_epi64((long long)hb)));
+  c[2] = __builtin_popcount(_mm512_cmpge_epu64_mask(k, _mm512_set1_epi64((long long)own)));
+}
+/* With AVX2: the eight keys as two registers, sign bits flipped for signed compares
+ * (nbs__cs_count4). */
+static inline NBS__CS_AVX2_TARGET void nbs__cs_back8_256(const uint64_t *k8, uint64_t own,
+                                                         uint64_t lb, uint64_t hb, int32_t c[3]) {
+  const uint64_t sign = (uint64_t)1 << 63;
+  const __m256i l = _mm256_set1_epi64x((long long)(lb ^ sign));
+  const __m256i h = _mm256_set1_epi64x((long long)(hb ^ sign));
+  const __m256i o = _mm256_set1_epi64x((long long)(own ^ sign));
+  c[0] = 8 - nbs__cs_count4(k8, l, false) - nbs__cs_count4(k8 + 4, l, false);
+  c[1] = nbs__cs_count4(k8, h, true) + nbs__cs_count4(k8 + 4, h, true);
+  c[2] = 8 - nbs__cs_count4(k8, o, false) - nbs__cs_count4(k8 + 4, o, false);
+}
+#endif
+
 /* A short row's element p (2D and 3D, swept element by element): how many of the places
  * just before p hold keys from lb on (*c1), above hb (*c2), and from own on (*c3): the row
  * before it in its layer (2D: the row below), x - fine .. x + fine (lb .. hb, where `before`
  * says there is such a row), and its own row from x - fine on (own); c1 >= c2 >= c3. Counted
  * among the sixteen keys before p, or found by search where those are all in reach or p
- * has fewer before it. */
+ * has fewer before it. The AVX-512 and AVX2 sweeps count among the eight keys before p
+ * first (back8: one load, or two, for the three counts), and go on as above only where all
+ * eight are in reach: a sparse domain's element has a key or two in reach, and the two
+ * loads and six compares of sixteen keys were a fifth of its sweep (2D huge domain, N =
+ * 1e6, interleaved, min of 5: search 8.90 -> 7.24 ns per element, 2D spacing S/D 100 and
+ * 200 at 1e5 8.97 -> 8.20 and 8.95 -> 8.05; AVX2 huge 9.41 -> 8.82; uniform and 3D the
+ * same). */
 static inline __attribute__((always_inline)) void
 nbs__cs_back(const uint64_t *key, int32_t p, uint64_t own, uint64_t lb, uint64_t hb,
-             bool before, nbs__cs_count_fn below, nbs__cs_count_fn upto, int32_t *c1,
-             int32_t *c2, int32_t *c3) {
+             bool before, nbs__cs_count_fn below, nbs__cs_count_fn upto,
+             nbs__cs_back8_fn back8, int32_t *c1, int32_t *c2, int32_t *c3) {
+  if (back8 && p >= 8) {
+    int32_t c[3];
+    back8(key + p - 8, own, lb, hb, c);
+    if ((before ? c[0] : c[2]) < 8) {
+      *c3 = c[2];
+      *c1 = before ? c[0] : c[2];
+      *c2 = before ? c[1] : c[2];
+      return;
+    }
+  }
   if (p >= NBS__CS_PAD) {
     const uint64_t *kb = key + p - NBS__CS_PAD;
     *c3 = NBS__CS_PAD - below(kb, own);
@@ -1617,8 +1660,8 @@ nbs__cs_row_blocks(const nbs__cs *c, nbs__sink *s, int32_t row_a, int32_t a, int
  * the windows' edges counted, not picked, so too from 4 (18.8 / 19.3) and 6 (19 -> 31). */
 static inline __attribute__((always_inline)) nbs_status
 nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
-                    nbs__cs_count_fn below, nbs__cs_count_fn upto, nbs__cs_pick_fn pick,
-                    bool listed) {
+                    nbs__cs_count_fn below, nbs__cs_count_fn upto, nbs__cs_back8_fn back8,
+                    nbs__cs_pick_fn pick, bool listed) {
   nbs_status st = NBS_OK;
   const uint64_t *key = c->key;
   const int bx = c->bx, by = c->by, ks = c->ks, kx = bx + ks;
@@ -1828,7 +1871,7 @@ nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
     /* The places before p: from p - c1 on, keys from lb on; from p - c2, above hb; from
      * p - c3, in reach in the own row (c1 >= c2 >= c3: lb <= hb < own) */
     int32_t c1 = 0, c2 = 0, c3 = 0;
-    if (back) nbs__cs_back(key, p, own, lb, hb, iy >= 1, below, upto, &c1, &c2, &c3);
+    if (back) nbs__cs_back(key, p, own, lb, hb, iy >= 1, below, upto, back8, &c1, &c2, &c3);
     rg.q0[rg.count] = p - c1;
     rg.q1[rg.count] = p - c2;
     rg.count += c1 > c2;
@@ -1871,7 +1914,8 @@ nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
  * counts of an element do not wait on those of the one before. */
 static inline __attribute__((always_inline)) nbs_status
 nbs__cs_sweep2_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
-                    nbs__cs_count_fn below, nbs__cs_count_fn upto, bool listed) {
+                    nbs__cs_count_fn below, nbs__cs_count_fn upto, nbs__cs_back8_fn back8,
+                    bool listed) {
   nbs_status st = NBS_OK;
   const uint64_t *key = c->key;
   const int bx = c->bx, ks = c->ks, kx = bx + ks;
@@ -1928,7 +1972,7 @@ nbs__cs_sweep2_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
     /* the places before p: from p - c1 on, keys from lb on; from p - c2, above hb; from
      * p - c3, in reach in the own row (c1 >= c2 >= c3: lb <= hb < own) */
     int32_t c1, c2, c3;
-    nbs__cs_back(key, p, own, lb, hb, row > 0, below, upto, &c1, &c2, &c3);
+    nbs__cs_back(key, p, own, lb, hb, row > 0, below, upto, back8, &c1, &c2, &c3);
     if (c1 > c2 || c3 > 0) {
       nbs__cs_ranges rg;
       rg.q0[0] = p - c1;
@@ -1948,11 +1992,12 @@ nbs__cs_sweep2_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
 /* The sweep of the places [from, to) of the cell order, into `out`: 2D or 3D. */
 static inline __attribute__((always_inline)) nbs_status
 nbs__cs_sweep_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
-                   nbs__cs_count_fn below, nbs__cs_count_fn upto, nbs__cs_pick_fn pick,
-                   bool listed) {
+                   nbs__cs_count_fn below, nbs__cs_count_fn upto, nbs__cs_back8_fn back8,
+                   nbs__cs_pick_fn pick, bool listed) {
   nbs__sink local = *out; /* kept in registers, written back at the end */
-  const nbs_status st = c->dim == 2 ? nbs__cs_sweep2_body(c, &local, from, to, below, upto, listed)
-                                    : nbs__cs_sweep3_body(c, &local, from, to, below, upto, pick, listed);
+  const nbs_status st =
+      c->dim == 2 ? nbs__cs_sweep2_body(c, &local, from, to, below, upto, back8, listed)
+                  : nbs__cs_sweep3_body(c, &local, from, to, below, upto, back8, pick, listed);
   *out = local;
   return st;
 }
@@ -1962,17 +2007,18 @@ nbs__cs_sweep_body(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to,
  * them); for AVX-512, the ranges' places listed (`listed`, see nbs__cs_ranges). */
 static nbs_status nbs__cs_sweep_generic(const nbs__cs *c, nbs__sink *out, int32_t from,
                                         int32_t to) {
-  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below, nbs__cs_upto, NULL, false);
+  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below, nbs__cs_upto, NULL, NULL, false);
 }
 #if NBS__CS_AVX512
 NBS__CS_AVX512_TARGET NBS__CS_HOT
 static nbs_status nbs__cs_sweep_avx512(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to) {
-  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below512, nbs__cs_upto512, nbs__cs_pick512,
-                            true);
+  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below512, nbs__cs_upto512,
+                            nbs__cs_back8_512, nbs__cs_pick512, true);
 }
 NBS__CS_AVX2_TARGET
 static nbs_status nbs__cs_sweep_avx2(const nbs__cs *c, nbs__sink *out, int32_t from, int32_t to) {
-  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below256, nbs__cs_upto256, NULL, false);
+  return nbs__cs_sweep_body(c, out, from, to, nbs__cs_below256, nbs__cs_upto256,
+                            nbs__cs_back8_256, NULL, false);
 }
 #endif
 
