@@ -126,10 +126,14 @@ class Suite:
         have = {r["tool"][4:] for r in results if r.get("status") == "ok"}
         talgs = [x for x in a.thread_algorithms if x in have]
         salgs = [x for x in a.step_algorithms if x in have]
+        # one-thread twins of other algorithms (--twin-algorithms), alternating with the rest
+        walgs = [x for x in a.twin_algorithms if x in have and x not in talgs]
         if not ("nbs" in tools and a.steps > 0 and scene == "uniform"):
             salgs = []
         if not ("nbs" in tools and talgs and n >= a.threads_min_n and a.threads):
             talgs = []
+        if not ("nbs" in tools and talgs):
+            walgs = []
         counts = [1] + (a.threads if n >= a.threads_min_n else [])
         best, procs = {}, {}
 
@@ -157,6 +161,11 @@ class Suite:
                                          str(dim), "--threads", str(t), "--algorithms",
                                          ",".join(salgs)] + steps, f"nbs-steps{t}", a.timeout)
                 keep(res)
+            if walgs:
+                res, err = self.run_cmd([f"{self.bin}/nbs_bench", "--file", path, "--dim",
+                                         str(dim), "--threads", "1", "--algorithms",
+                                         ",".join(walgs)] + timing, "nbs-twins", a.timeout)
+                keep(res, "-1t")
 
         for _ in range(a.thread_rounds if talgs or salgs else 0):
             one_round()
@@ -169,7 +178,7 @@ class Suite:
 
         def disturbed():
             out = []
-            for x in talgs:
+            for x in talgs + walgs:
                 r, twin = first.get(f"nbs-{x}"), best.get(f"nbs-{x}-1t")
                 if r and twin and r.get("status") == "ok" and twin.get("status") == "ok":
                     u, v = float(r["seconds"]), float(twin["seconds"])
@@ -201,8 +210,10 @@ class Suite:
         for r in best.values():
             if r.get("status") == "ok":
                 what = ("time steps: " if "-steps" in r["tool"] else "")
+                twin = r["tool"][4:-3] in walgs and r["tool"].endswith("-1t")
                 r["note"] = (what + f"fastest of {procs[r['tool']]} processes alternating "
-                             f"with the other thread counts" +
+                             + ("with the thread runs" if twin else
+                                "with the other thread counts") +
                              (f" ({retried} more rounds: the case was disturbed)"
                               if retried else ""))
                 if "-steps" in r["tool"]:
@@ -214,7 +225,7 @@ class Suite:
         # and LAMMPS, the peer of the targets, keeps the fastest of as many processes
         # (--lammps-rounds, by default 1 + --thread-rounds), so that neither side's ratio
         # rests on one process of a shared machine.
-        for x in talgs:
+        for x in talgs + walgs:
             r, twin = first.get(f"nbs-{x}"), best.get(f"nbs-{x}-1t")
             if not (r and twin and r.get("status") == "ok" and twin.get("status") == "ok"):
                 continue
@@ -225,7 +236,9 @@ class Suite:
                 results[results.index(r)] = fast
                 r = fast
             r["note"] = (f"fastest of {k} one-thread processes (its own and those of "
-                         f"nbs-{x}-1t)" + (" (the case was disturbed)" if retried else ""))
+                         f"nbs-{x}-1t" + (", alternating with the thread runs" if x in walgs
+                                          else "") + ")" +
+                         (" (the case was disturbed)" if retried else ""))
         results += list(best.values())
         for peer in [t for t in PEERS if t in tools]:
             skip = self.skip_peer(peer, scene, dim, n, path)
@@ -640,7 +653,8 @@ DISTURBED = 1.15
 
 def consistency(rows):
     """The same configuration is measured twice in a run: nbs-auto and nbs-cellsort on their
-    own, and again (-1t) alternated with their two-thread runs, all on one thread. Where the
+    own, and again (-1t) alternated with their two-thread runs, all on one thread; so is
+    nbs-nbs (--twin-algorithms), whose rows targets read too. Where the
     two differ by more than DISTURBED, the machine was disturbed during one of them (this
     VM's neighbours come and go), and every target read from those rows is suspect: the
     lines below say which, so that a reader does not take noise for a result."""
@@ -648,7 +662,7 @@ def consistency(rows):
           if r["status"] == "ok" and r["ns_per_element"] and not r["spacing"]}
     bad = []
     for (scene, dim, order, n, tool), r in sorted(ok.items()):
-        if tool not in ("nbs-auto", "nbs-cellsort") or r.get("threads") not in ("", "1"):
+        if not tool.startswith("nbs-") or tool.endswith("-1t") or r.get("threads") not in ("", "1"):
             continue
         twin = ok.get((scene, dim, order, n, tool + "-1t"))
         if not twin:
@@ -836,6 +850,11 @@ def main(argv):
                     help="extra thread counts for --thread-algorithms ('' for none); "
                          "every other nbs run uses one thread")
     ap.add_argument("--thread-algorithms", default="auto,cellsort")
+    ap.add_argument("--twin-algorithms", default="nbs",
+                    help="other nbs algorithms measured again on one thread in each round of "
+                         "the thread runs (rows nbs-ALG-1t), so that their rows, which "
+                         "targets read, are checked for a disturbed machine as the thread "
+                         "algorithms' are and keep the fastest of the processes")
     ap.add_argument("--thread-rounds", type=int, default=3,
                     help="processes per thread count (one included), alternating; each row "
                          "keeps its fastest")
@@ -902,6 +921,7 @@ def main(argv):
     a.algorithms = [s for s in a.algorithms.split(",") if s]
     a.threads = [int(x) for x in a.threads.split(",") if x.strip() and int(x) != 1]
     a.thread_algorithms = [s for s in a.thread_algorithms.split(",") if s]
+    a.twin_algorithms = [s for s in a.twin_algorithms.split(",") if s]
     a.step_algorithms = [s for s in a.step_algorithms.split(",") if s]
     a.spacings = number_list(a.spacings, lambda x: int(x) if x == int(x) else x)
     a.sweep_n = int(a.sweep_n)
