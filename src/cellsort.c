@@ -108,12 +108,11 @@
  *    grid is known, and measures the bounding box as it goes; its keys stand where the
  *    grid gives the same keying, which it does but where the box crosses a lattice line
  *    or a power of two of cells (nbs__cellsort_step; 3D steps 2-3% faster, 2D not);
- *  - else nbs__cs_warm: one pass reads the elements in the last order, as the gather does,
- *    computes each one's key again and keeps in place, with its coordinates, the elements
- *    whose key did not change; the few that changed place are sorted again and merged back,
- *    words and coordinates. That replaces steps 1-3 by one pass like the gather and a merge
- *    that moves the words and coordinates of every element after the first one taken out
- *    (32 B per element, read and written).
+ *  - else nbs__cs_warm: one pass gathers the elements in the last order, a chunk at a time,
+ *    and computes each one's key again from the copies; the few whose key changed are sorted
+ *    again and merged back, words and coordinates, in place: the words kept move only where
+ *    the elements taken out and put back lie on either side of them (nbs__cs_warm_merge).
+ *    That replaces steps 1-3 by one pass like the gather and a merge of the few.
  * Measured (3D, N = 1e6, fraction 0.5, random order, one thread, interleaved, min of 3-5
  * processes, ns per element; nbs_bench --move D against --fresh; the same bytes):
  *   nbs__cs_warm (before nbs__cs_rekey): from scratch 33.0-33.3, unmoved 29.6, steps of
@@ -2452,8 +2451,8 @@ static size_t nbs__cs_input_bytes(const nbs__cs *c) {
  * arguments, so that the loops that call it hold them in locals: read through c at every
  * element, the time-step pass took 1 ns per element more (3D and 2D, N = 1e6, steps of
  * 1e-3; the gathers 0.3-0.9 ns, see nbs__cs_gather). nbs__cs_take: the same with c's
- * arrays, for the merge's takes of the changed elements (nbs__cs_merge), where that cost does
- * not show. */
+ * arrays, for the merge's takes of the changed elements (nbs__cs_warm_merge), where that
+ * cost does not show. */
 static inline void nbs__cs_place(double *xs, double *ys, double *zs, double *rs, const double *x,
                                  const double *r, int dim, int32_t p, int32_t e) {
   const double *xk = x + (size_t)e * (size_t)dim;
@@ -2469,7 +2468,7 @@ static inline void nbs__cs_take(const nbs__cs *c, const nbs__run *run, int32_t p
 /* result = the first i of [floor, top) for which below(i) is false (top if none), where
  * below(i) is true up to some i and false from it on: galloping down from top (1, 2, 4 ...
  * places), then bisection, so that it takes few steps when the answer is near top, as it is
- * for each word of a merge from the end (nbs__cs_merge, nbs__cs_core). */
+ * for each word of a merge from the end (nbs__cs_core). */
 #define NBS__CS_GALLOP(result, floor, top, below)                                            \
   do {                                                                                        \
     int32_t nbs__hi = (top), nbs__lo = (floor);                                               \
@@ -2490,127 +2489,124 @@ static inline void nbs__cs_take(const nbs__cs *c, const nbs__run *run, int32_t p
     (result) = nbs__lo;                                                                       \
   } while (0)
 
-/* The number of kept words among the first p places of the merge of key[0, k) and S[0, m)
- * (both sorted, all words distinct): the i with key[i - 1] < S[p - i] and
- * S[p - i - 1] < key[i], found by bisection (the merge path). */
-static int32_t nbs__cs_split(const uint64_t *key, int32_t k, const uint64_t *S, int64_t m,
-                             int64_t p) {
-  int64_t lo = p - m > 0 ? p - m : 0, hi = p < k ? p : k;
-  while (lo < hi) {
-    const int64_t i = lo + (hi - lo) / 2;
-    if (key[i] < S[p - i - 1]) lo = i + 1;
-    else hi = i;
+/* Moves the places [a, b) of the cell order (word, coordinates, radius) by d places. */
+static void nbs__cs_shift(const nbs__cs *c, int32_t a, int32_t b, int32_t d) {
+  if (b - a <= 8) { /* most runs: a loop, not five calls (memmove's direction: d's) */
+    for (int32_t i = 0; i < b - a; i++) {
+      const int32_t q = d < 0 ? a + i : b - 1 - i;
+      c->key[q + d] = c->key[q];
+      c->xs[q + d] = c->xs[q];
+      c->ys[q + d] = c->ys[q];
+      if (c->dim == 3) c->zs[q + d] = c->zs[q];
+      if (c->rs) c->rs[q + d] = c->rs[q];
+    }
+    return;
   }
-  return (int32_t)lo;
+  const size_t len = (size_t)(b - a);
+  const size_t to = (size_t)((int64_t)a + d);
+  memmove(c->key + to, c->key + a, len * sizeof *c->key);
+  memmove(c->xs + to, c->xs + a, len * sizeof *c->xs);
+  memmove(c->ys + to, c->ys + a, len * sizeof *c->ys);
+  if (c->dim == 3) memmove(c->zs + to, c->zs + a, len * sizeof *c->zs);
+  if (c->rs) memmove(c->rs + to, c->rs + a, len * sizeof *c->rs);
 }
 
-/* Merges the m sorted words S taken out (their coordinates read from the input) into the k
- * kept words at the start of key[] (with their coordinates), in place, from the end, a word
- * of S at a time: the kept words above it (found by galloping down from the last, then
- * bisection) move up as a run, one memmove per array, and it takes the place below them; a
- * kept word only moves up, so none is overwritten before it is read. (Place by place, with
- * a branch on which came next, the merge took 0.4 ns per element more in 3D and 0.9 in 2D:
- * time steps of 1e-3, N = 1e6, interleaved, min of 4, 32.8 -> 32.4 and 18.0 -> 17.2; the
- * moves are now at the memory's speed, 2.9 ns of the 3D step's 33 by perf.) In T parts
- * (one per thread asked for) part t fills the places [n t / T, n (t + 1) / T), whose kept
- * words and words of S the merge path gives; the kept words it reads below its first place
- * lie in the places of the parts before it, so it copies them to `side` (room for `cap`
- * elements) before any part is written. */
-static void nbs__cs_merge(const nbs__cs *c, const nbs__run *run, int32_t k, const uint64_t *S,
-                          int64_t m, uint64_t *side, int64_t cap, int threads) {
+/* The warm start's merge, in place: the m elements whose words changed leave the places
+ * P[0 .. m) (ascending) of the last order, and their new words S[0 .. m) (sorted) go in
+ * among the words kept. A kept word at place p ends up d(p) = #{j: S[j] < key[p]} -
+ * #{i: P[i] < p} places away, and d changes only at the P and at the places I[j] where the
+ * S would go in the last order (the lower bound of S[j] in key[]: all words differ), so the
+ * kept words move in at most 2m + 1 runs of one d each, most of them 0 where the elements
+ * moved little (a word taken out and put back a few places on). Final places keep the kept
+ * words' order, so a word moved down (d < 0) only lands on a place whose word moved down
+ * before it, or was taken out: the runs with d < 0 move in ascending order, those with d >
+ * 0 in descending order, and neither lands on a place the other reads. S[j] then takes its
+ * place, I[j] - #{i: P[i] < I[j]} + j, its coordinates read from the input. The result is
+ * the merge by word: the order a sort from scratch gives. Where the elements moved little,
+ * only the few words between an element's old and new places move; the merge before (all
+ * the kept elements after the first taken out moved down during the check, then up by runs
+ * from the end, several threads sharing it) moved every element past the first change
+ * twice. Measured (time steps of D diameters per axis, nbs_bench --move D, one thread,
+ * interleaved, min of 3-4, preparation in ns per element, the same hashes): D = 1e-4, 2D
+ * huge 6.43 -> 3.92; D = 1e-3, 2D sparse (fraction 0.5, 1,443 elements re-sorted) 6.38 ->
+ * 5.29, huge 7.12 -> 5.67, clustered 6.50 -> 5.34, 3D huge 11.22 -> 8.30, two threads 2D
+ * sparse 4.25 -> 3.34; D = 1e-2, 3D huge 12.67 -> 11.80, 2D huge 8.91 -> 8.48, but 2D sparse
+ * 7.41 -> 8.55 and clustered 7.46 -> 8.29: there 15,000 elements re-sorted, a sixth of
+ * them a row away (1,250 places in those crowded rows), so that most words move, in many
+ * runs, and after the chunks' pass, out of the caches. I (m int32) is scratch. */
+static void nbs__cs_warm_merge(const nbs__cs *c, const nbs__run *run, const uint64_t *S,
+                               const int32_t *P, int32_t *I, int64_t m) {
   const int32_t n = c->n;
   const int dim = c->dim;
   const uint64_t emask = c->imask;
-  uint64_t *key = c->key;
-  double *xs = c->xs, *ys = c->ys, *zs = c->zs, *rs = c->rs;
+  const uint64_t *key = c->key;
   const double *x = run->x, *r = run->r;
-  uint64_t *sk = side;
-  double *sx = (double *)(void *)(sk + cap), *sy = sx + cap, *sz = sy + cap;
-  double *sr = sz + (dim == 3 ? cap : 0);
-  int32_t I[NBS__THREADS_MAX + 1];
-  int64_t off[NBS__THREADS_MAX + 1];
-  for (int t = 0; t <= threads; t++) I[t] = nbs__cs_split(key, k, S, m, nbs__chunk(n, t, threads));
-  off[0] = 0;
-  for (int t = 0; t < threads; t++) {
-    const int32_t P0 = nbs__chunk(n, t, threads), below = P0 < I[t + 1] ? P0 : I[t + 1];
-    off[t + 1] = off[t] + (below > I[t] ? below - I[t] : 0);
+  /* I[j]: galloping up from I[j - 1] (S is sorted), then bisection */
+  for (int64_t j = 0, at = 0; j < m; j++) {
+    int64_t step = 1, hi = at;
+    while (hi < n && key[hi] < S[j]) {
+      at = hi + 1;
+      hi += step;
+      step *= 2;
+    }
+    if (hi > n) hi = n;
+    at += nbs__cs_lower(key + at, (int32_t)(hi - at), S[j]);
+    I[j] = (int32_t)at;
   }
-#if defined(_OPENMP)
-#pragma omp parallel num_threads(threads) if (threads > 1)
-#endif
-  {
-    NBS__PARTS(t, threads) {
-      const int32_t P0 = nbs__chunk(n, t, threads);
-      const int64_t o = off[t] - I[t];
-      for (int32_t i = I[t]; i < P0 && i < I[t + 1]; i++) {
-        sk[o + i] = key[i];
-        sx[o + i] = xs[i];
-        sy[o + i] = ys[i];
-        if (dim == 3) sz[o + i] = zs[i];
-        if (rs) sr[o + i] = rs[i];
-      }
+  /* the runs with d < 0, ascending: d(p) = #{I[j] <= p} - #{P[i] < p} */
+  int64_t ir = 0, is = 0;
+  int32_t d = 0;
+  for (int32_t p = 0; p < n;) {
+    while (is < m && I[is] <= p) {
+      d++;
+      is++;
     }
-#if defined(_OPENMP)
-#pragma omp barrier
-#endif
-    NBS__PARTS(t, threads) {
-      const int32_t P0 = nbs__chunk(n, t, threads), P1 = nbs__chunk(n, t + 1, threads);
-      const int32_t I0 = I[t], I1 = I[t + 1];
-      const int64_t J0 = P0 - I0, J1 = P1 - I1, o = off[t] - I0;
-      /* the kept word i, from the side copy below P0 */
-#define NBS__CS_KEPT(i) ((i) < P0 ? sk[o + (i)] : key[i])
-      /* the kept words [lo, hi) up by `by` places: those at P0 and above within the arrays
-       * (memmove: a move by fewer places than the run overlaps itself), those below from
-       * the side copy */
-#define NBS__CS_RUN(lo, hi, by)                                                                \
-  do {                                                                                        \
-    const int32_t m0 = (lo) > P0 ? (lo) : P0, m1 = (hi);                                      \
-    if (m1 > m0) {                                                                            \
-      const size_t len = (size_t)(m1 - m0), d = (size_t)m0 + (size_t)(by);                   \
-      memmove(key + d, key + m0, len * sizeof *key);                                          \
-      memmove(xs + d, xs + m0, len * sizeof *xs);                                             \
-      memmove(ys + d, ys + m0, len * sizeof *ys);                                             \
-      if (dim == 3) memmove(zs + d, zs + m0, len * sizeof *zs);                               \
-      if (rs) memmove(rs + d, rs + m0, len * sizeof *rs);                                     \
-    }                                                                                         \
-    const int32_t s1 = (hi) < P0 ? (hi) : P0;                                                 \
-    for (int32_t q = (lo); q < s1; q++) {                                                     \
-      const size_t d = (size_t)q + (size_t)(by);                                             \
-      key[d] = sk[o + q];                                                                     \
-      xs[d] = sx[o + q];                                                                      \
-      ys[d] = sy[o + q];                                                                      \
-      if (dim == 3) zs[d] = sz[o + q];                                                        \
-      if (rs) rs[d] = sr[o + q];                                                              \
-    }                                                                                         \
-  } while (0)
-      int32_t rr = I1; /* the kept words [I0, rr) are not placed yet */
-      for (int64_t j = J1 - 1; j >= J0; j--) {
-        const uint64_t w = S[j];
-        /* the kept words above w: [lo, rr) */
-        int32_t lo;
-#define NBS__CS_BELOW(i) (NBS__CS_KEPT(i) < w)
-        NBS__CS_GALLOP(lo, I0, rr, NBS__CS_BELOW);
-#undef NBS__CS_BELOW
-        /* kept word i has the j + 1 words S[0 .. j] below it: to place i + j + 1 */
-        NBS__CS_RUN(lo, rr, j + 1);
-        /* the elements taken out are few and anywhere: ask for the coordinates of the one
-         * eight insertions ahead */
-        if (j >= J0 + 8) {
-          const size_t ea = (size_t)(S[j - 8] & emask) * (size_t)dim;
-          __builtin_prefetch(x + ea);
-          __builtin_prefetch(x + ea + (dim - 1));
-          if (rs) __builtin_prefetch(r + (S[j - 8] & emask));
-        }
-        const int32_t p = lo + (int32_t)j;
-        key[p] = w;
-        nbs__cs_take(c, run, p, (int32_t)(w & emask));
-        rr = lo;
-      }
-      /* the kept words below this part's words of S, up by the J0 words of S before it */
-      if (J0 > 0) NBS__CS_RUN(I0, rr, J0);
-#undef NBS__CS_RUN
-#undef NBS__CS_KEPT
+    if (ir < m && P[ir] == p) { /* taken out: the places after it are one closer */
+      d--;
+      ir++;
+      p++;
+      continue;
     }
+    int32_t e = n;
+    if (ir < m && P[ir] < e) e = P[ir];
+    if (is < m && I[is] < e) e = I[is];
+    if (d < 0) nbs__cs_shift(c, p, e, d);
+    p = e;
+  }
+  /* the runs with d > 0, descending: d(p) = #{P[i] >= p} - #{I[j] > p} */
+  ir = m - 1;
+  is = m - 1;
+  int32_t np = 0, ni = 0;
+  for (int32_t p = n - 1; p >= 0;) {
+    while (is >= 0 && I[is] > p) {
+      ni++;
+      is--;
+    }
+    if (ir >= 0 && P[ir] == p) {
+      np++;
+      ir--;
+      p--;
+      continue;
+    }
+    int32_t lo = 0; /* the run is [lo, p] */
+    if (ir >= 0 && P[ir] + 1 > lo) lo = P[ir] + 1;
+    if (is >= 0 && I[is] > lo) lo = I[is];
+    if (np - ni > 0) nbs__cs_shift(c, lo, p + 1, np - ni);
+    p = lo - 1;
+  }
+  /* the new words in their places */
+  int64_t below = 0; /* #{P[i] < I[j]} */
+  for (int64_t j = 0; j < m; j++) {
+    while (below < m && P[below] < I[j]) below++;
+    if (j + 8 < m) { /* the elements taken out are few and anywhere: ask ahead */
+      const size_t ea = (size_t)(S[j + 8] & emask) * (size_t)dim;
+      __builtin_prefetch(x + ea);
+      __builtin_prefetch(x + ea + (dim - 1));
+      if (r) __builtin_prefetch(r + (S[j + 8] & emask));
+    }
+    const int32_t q = (int32_t)(I[j] - below + j);
+    c->key[q] = S[j];
+    nbs__cs_take(c, run, q, (int32_t)(S[j] & emask));
   }
 }
 
@@ -2672,23 +2668,22 @@ static void nbs__cs_words_at512(const nbs__cs_keying *kg, const double *const cs
  * key[] holds it as packed words, sorted, of the same n elements. One pass places the
  * elements' coordinates in that order, as the gather does, a chunk at a time, and computes
  * the chunk's new words from those copies while they are in the L1 cache (8 at a time with
- * AVX-512); a chunk whose words all stand, before any was taken out, is done. An element
- * whose word is unchanged keeps its place: it moves down over the places of those taken out
- * before it, with its coordinates, and these words stay sorted, since they were. An element whose
- * word changed (it moved to another x sub-cell, row or layer) is taken out to `spare`.
+ * AVX-512); a chunk whose words all stand is done. An element whose word changed (it moved
+ * to another x sub-cell, row or layer) has its place and its new word noted in `spare`.
  * When none changed, that is all: the sort and the gather are skipped (the figures are in
- * the file comment). Otherwise the few taken out are sorted
- * (the radix sort, in spare) and merged back from the end. Sorted by the whole word (key,
- * then element), the result is the order a sort from scratch gives, whose stable passes
- * leave equal keys in element order: the same pairs in the same order.
+ * the file comment). Otherwise the new words are sorted (the radix sort, in spare) and
+ * merged in place of the old (nbs__cs_warm_merge). Sorted by the whole word (key, then
+ * element), the result is the order a sort from scratch gives, whose stable passes leave
+ * equal keys in element order: the same pairs in the same order.
  * Returns false, the arrays then holding nothing of use, when more than n /
  * NBS__CS_WARM_SHARE elements changed place (the pass stops there: an input that is not a
  * later state of the same elements stops it within the first sixteenth); the caller sorts
- * from scratch. With several threads each takes a contiguous part, its own share of spare,
- * and the parts are closed up before the merge, which the threads share (nbs__cs_merge).
- * spare holds 7 n / NBS__CS_WARM_SHARE words: the words taken out, the radix sort's
- * scratch, and the merge's side copy of as many elements (word, coordinates, radius), 3.5 n
- * bytes of the 4 n of the idx array, which packed words leave unused. */
+ * from scratch. With several threads each takes a contiguous part and its own share of
+ * spare, and the parts' notes are closed up before the merge, which one thread does (it
+ * moves few words where the elements moved little). spare holds 7 n / NBS__CS_WARM_SHARE
+ * words, 3.5 n bytes of the 4 n of the idx array, which packed words leave unused; this
+ * uses 3.5 n / NBS__CS_WARM_SHARE words of it: the new words, the radix sort's scratch,
+ * the places (int32) and the merge's insertion places (int32). */
 static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_keying *kg,
                          int eb, int bits, uint64_t *spare, uint32_t *hist, int threads,
                          int64_t *moved) {
@@ -2704,9 +2699,12 @@ static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
 #if NBS__CS_AVX512
   const bool v512 = run->ctx->simd == NBS__SIMD_AVX512;
 #endif
-  /* zeroed for GCC 12, which without OpenMP takes kept[0] for unset after the pass */
-  int32_t kept[NBS__THREADS_MAX] = {0};
-  int64_t out[NBS__THREADS_MAX];
+  /* spare: the new words [0, limit), the sort's scratch [limit, 2 limit), the places taken
+   * out (int32) from 2 limit, then their insertion places (int32) from 3 limit */
+  int32_t *places = (int32_t *)(void *)(spare + 2 * limit);
+  int32_t *ins = (int32_t *)(void *)(spare + 3 * limit);
+  /* zeroed for GCC 12, which without OpenMP takes out[0] for unset after the pass */
+  int64_t out[NBS__THREADS_MAX] = {0};
   bool over = false;
 #if defined(_OPENMP)
 #pragma omp parallel num_threads(threads) if (threads > 1) reduction(|| : over)
@@ -2715,8 +2713,8 @@ static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
     const int32_t from = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
     const double *const cs[3] = {xs, ys, zs};
     uint64_t *mine = spare + (size_t)t * (size_t)share;
+    int32_t *mine_at = places + (size_t)t * (size_t)share;
     uint64_t words[NBS__CS_WARM_CHUNK];
-    int32_t k = from;
     int64_t m = 0;
     for (int32_t a = from; a < to && !over; a += NBS__CS_WARM_CHUNK) {
       const int32_t b = to - a > NBS__CS_WARM_CHUNK ? a + NBS__CS_WARM_CHUNK : to;
@@ -2740,33 +2738,19 @@ static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
       {
         nbs__cs_words_at(kg, cs, dim, key, emask, eb, a, b, words);
       }
-      /* nothing taken out yet and the chunk unchanged: all of it stays where it is */
-      if (k == a && memcmp(words, key + a, (size_t)(b - a) * sizeof *key) == 0) {
-        k = b;
-        continue;
-      }
-      /* an element whose word is unchanged keeps its place: it moves down over the places
-       * of those taken out before it, with its coordinates */
+      if (memcmp(words, key + a, (size_t)(b - a) * sizeof *key) == 0) continue;
+      /* the places whose word changed, and their new words */
       for (int32_t p = a; p < b; p++) {
         const uint64_t w = words[p - a];
-        if (w == key[p]) {
-          if (k != p) {
-            key[k] = w;
-            xs[k] = xs[p];
-            ys[k] = ys[p];
-            if (dim == 3) zs[k] = zs[p];
-            if (rs) rs[k] = rs[p];
-          }
-          k++;
-        } else if (m < share) {
-          mine[m++] = w;
-        } else {
+        if (w == key[p]) continue;
+        if (m == share) {
           over = true;
           break;
         }
+        mine_at[m] = p;
+        mine[m++] = w;
       }
     }
-    kept[t] = k - from;
     out[t] = m;
     if (over) break;
   }
@@ -2776,25 +2760,16 @@ static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
   for (int t = 0; t < threads; t++) m += out[t];
   if (m == 0) return true;
 
-  /* close up the parts (each thread's kept elements, and its words taken out) */
-  int32_t k = kept[0];
+  /* the parts' words and places together, in place order */
   int64_t j = out[0];
   for (int t = 1; t < threads; t++) {
-    const int32_t from = nbs__chunk(n, t, threads);
-    const size_t len = (size_t)kept[t];
-    memmove(key + k, key + from, len * sizeof *key);
-    memmove(xs + k, xs + from, len * sizeof *xs);
-    memmove(ys + k, ys + from, len * sizeof *ys);
-    if (dim == 3) memmove(zs + k, zs + from, len * sizeof *zs);
-    if (rs) memmove(rs + k, rs + from, len * sizeof *rs);
-    k += kept[t];
     memmove(spare + j, spare + (size_t)t * (size_t)share, (size_t)out[t] * sizeof *spare);
+    memmove(places + j, places + (size_t)t * (size_t)share, (size_t)out[t] * sizeof *places);
     j += out[t];
   }
   nbs__radix(spare, NULL, spare + limit, NULL, spare, NULL, (int32_t)m, 0,
              nbs__radix_digits(bits + eb), hist, 1, NULL, 0);
-  nbs__cs_merge(c, run, k, spare, m, spare + 2 * limit, limit, threads);
-  *moved = m;
+  nbs__cs_warm_merge(c, run, spare, places, ins, m);  *moved = m;
   return true;
 }
 
