@@ -8,9 +8,9 @@ the same run. Each tool reports the number of contact pairs; all must agree.
 
 Every nbs row is a detection from scratch (nbs_bench --fresh): the same elements detected
 again are not a time step, and cellsort would find them already in order. Time steps are
-rows of their own, nbs-ALG-steps (--steps, uniform scenes): every element moves by up to D
-diameters per axis before each detection (not timed), the context kept from step to step,
-as in a simulation; they agree when the last step's pairs are the bytes of a detection from
+rows of their own, nbs-ALG-steps (--steps; --step-scenes, uniform and huge): every element
+moves by up to D diameters per axis before each detection (not timed), the context kept
+from step to step, as in a simulation; they agree when the last step's pairs are the bytes of a detection from
 scratch of the same coordinates (same_as_fresh), since moved elements have other contacts.
 
 Results: <out>/results.csv (one row per case and tool), <out>/summary.md (headline table
@@ -122,13 +122,13 @@ class Suite:
         # thread count alternate in processes of their own, --thread-rounds times, and each
         # row keeps its fastest round, so that a disturbance of one process (on a shared
         # machine, the second core taken for a while) does not decide the ratio. The time
-        # steps (uniform scenes) alternate with them the same way.
+        # steps (--step-scenes) alternate with them the same way.
         have = {r["tool"][4:] for r in results if r.get("status") == "ok"}
         talgs = [x for x in a.thread_algorithms if x in have]
         salgs = [x for x in a.step_algorithms if x in have]
         # one-thread twins of other algorithms (--twin-algorithms), alternating with the rest
         walgs = [x for x in a.twin_algorithms if x in have and x not in talgs]
-        if not ("nbs" in tools and a.steps > 0 and scene == "uniform"):
+        if not ("nbs" in tools and a.steps > 0 and scene in a.step_scenes):
             salgs = []
         if not ("nbs" in tools and talgs and n >= a.threads_min_n and a.threads):
             talgs = []
@@ -864,9 +864,13 @@ def main(argv):
     ap.add_argument("--retry-wait", type=float, default=10.0,
                     help="seconds of pause before each of those rounds")
     ap.add_argument("--steps", type=float, default=1e-3,
-                    help="time-step rows (nbs-ALG-steps, uniform scenes): each element moves "
+                    help="time-step rows (nbs-ALG-steps, --step-scenes): each element moves "
                          "up to this many diameters per axis per step (0: none)")
     ap.add_argument("--step-algorithms", default="auto")
+    ap.add_argument("--step-scenes", default="uniform,huge",
+                    help="scenes with time-step rows: uniform (the targets read it), and the "
+                         "huge domain, whose keys are too wide for the element's half of a "
+                         "word (cellsort's other start from the last order, nbs__cs_warm)")
     ap.add_argument("--threads-min-n", type=float, default=0)
     ap.add_argument("--fraction", type=float, default=0.5, help="uniform scenes")
     ap.add_argument("--sparse-fraction", type=float, default=0.005)
@@ -922,6 +926,7 @@ def main(argv):
     a.threads = [int(x) for x in a.threads.split(",") if x.strip() and int(x) != 1]
     a.thread_algorithms = [s for s in a.thread_algorithms.split(",") if s]
     a.twin_algorithms = [s for s in a.twin_algorithms.split(",") if s]
+    a.step_scenes = [s for s in a.step_scenes.split(",") if s]
     a.step_algorithms = [s for s in a.step_algorithms.split(",") if s]
     a.spacings = number_list(a.spacings, lambda x: int(x) if x == int(x) else x)
     a.sweep_n = int(a.sweep_n)
