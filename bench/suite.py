@@ -10,8 +10,9 @@ Every nbs row is a detection from scratch (nbs_bench --fresh): the same elements
 again are not a time step, and cellsort would find them already in order. Time steps are
 rows of their own, nbs-ALG-steps (--steps; --step-scenes, uniform and huge): every element
 moves by up to D diameters per axis before each detection (not timed), the context kept
-from step to step, as in a simulation; they agree when the last step's pairs are the bytes of a detection from
-scratch of the same coordinates (same_as_fresh), since moved elements have other contacts.
+from step to step, as in a simulation; they agree when the last step's pairs are the bytes
+of a detection from scratch of the same coordinates (same_as_fresh), since moved elements
+have other contacts.
 
 Results: <out>/results.csv (one row per case and tool), <out>/summary.md (headline table
 and targets, computed from the rows), <out>/machine.txt and PNG plots.
@@ -654,15 +655,16 @@ DISTURBED = 1.15
 def consistency(rows):
     """The same configuration is measured twice in a run: nbs-auto and nbs-cellsort on their
     own, and again (-1t) alternated with their two-thread runs, all on one thread; so is
-    nbs-nbs (--twin-algorithms), whose rows targets read too. Where the
-    two differ by more than DISTURBED, the machine was disturbed during one of them (this
-    VM's neighbours come and go), and every target read from those rows is suspect: the
-    lines below say which, so that a reader does not take noise for a result."""
+    nbs-nbs (--twin-algorithms), whose rows targets read too. Where the two differ by more
+    than DISTURBED, the machine was disturbed during one of them (this VM's neighbours come
+    and go), and every target read from those rows is suspect: the lines below say which, so
+    that a reader does not take noise for a result."""
     ok = {(r["scene"], r["dim"], r["order"], r["N"], r["tool"]): r for r in rows
           if r["status"] == "ok" and r["ns_per_element"] and not r["spacing"]}
     bad = []
     for (scene, dim, order, n, tool), r in sorted(ok.items()):
-        if not tool.startswith("nbs-") or tool.endswith("-1t") or r.get("threads") not in ("", "1"):
+        twin_row = tool.endswith("-1t")
+        if not tool.startswith("nbs-") or twin_row or r.get("threads") not in ("", "1"):
             continue
         twin = ok.get((scene, dim, order, n, tool + "-1t"))
         if not twin:

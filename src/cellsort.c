@@ -1825,13 +1825,13 @@ nbs__cs_sweep3_body(const nbs__cs *c, nbs__sink *s, int32_t from, int32_t to,
     rg.count = 0;
     rg.places = -1;
     rg.list = list;
-    if (listed && pick && down_near && p >= NBS__CS_PAD && key[p - NBS__CS_PAD] < first_in &&
+    if (pick && down_near && p >= NBS__CS_PAD && key[p - NBS__CS_PAD] < first_in &&
         s->cap - s->count >= 2 * NBS__CS_PAD + 1 + NBS__CS_LANES) {
-      /* With AVX-512 (listed), where all of it lies among those sixteen keys each side: the
-       * places of the keys in the windows, picked from each sixteen at once (their row in
-       * range, their x in the window), in key order, the list the kernel loops over; the
-       * one range that holds p tells the kernel where the element is (the same pairs in
-       * the same order as from the ranges, below). */
+      /* With AVX-512 (the only sweep with a picker, and `listed`), where all of it lies
+       * among those sixteen keys each side: the places of the keys in the windows, picked
+       * from each sixteen at once (their row in range, their x in the window), in key
+       * order, the list the kernel loops over; the one range that holds p tells the kernel
+       * where the element is (the same pairs in the same order as from the ranges, below). */
       int32_t places = 0;
       if (down) places = pick(key, q, kx, ks, mx, lrow | (uint64_t)y0, (uint64_t)(y1 - y0), xl,
                               xh - xl, list, places);
@@ -2680,10 +2680,10 @@ static void nbs__cs_words_at512(const nbs__cs_keying *kg, const double *const cs
  * later state of the same elements stops it within the first sixteenth); the caller sorts
  * from scratch. With several threads each takes a contiguous part and its own share of
  * spare, and the parts' notes are closed up before the merge, which one thread does (it
- * moves few words where the elements moved little). spare holds 7 n / NBS__CS_WARM_SHARE
- * words, 3.5 n bytes of the 4 n of the idx array, which packed words leave unused; this
- * uses 3.5 n / NBS__CS_WARM_SHARE words of it: the new words, the radix sort's scratch,
- * the places (int32) and the merge's insertion places (int32). */
+ * moves few words where the elements moved little). spare is the idx array (4 n bytes),
+ * which packed words leave unused; this uses 3.5 n / NBS__CS_WARM_SHARE words of it: the
+ * new words, the radix sort's scratch, the places (int32) and the merge's insertion places
+ * (int32). */
 static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_keying *kg,
                          int eb, int bits, uint64_t *spare, uint32_t *hist, int threads,
                          int64_t *moved) {
@@ -2769,7 +2769,8 @@ static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
   }
   nbs__radix(spare, NULL, spare + limit, NULL, spare, NULL, (int32_t)m, 0,
              nbs__radix_digits(bits + eb), hist, 1, NULL, 0);
-  nbs__cs_warm_merge(c, run, spare, places, ins, m);  *moved = m;
+  nbs__cs_warm_merge(c, run, spare, places, ins, m);
+  *moved = m;
   return true;
 }
 
