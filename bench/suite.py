@@ -360,6 +360,32 @@ class Suite:
             else:
                 log(f"   {row['tool']:14s} {row['status']} {row.get('note', '')}")
 
+    def floors(self):
+        """The memory's own cost per element at each N (nbs_floor: a random gather of the
+        input, and one streaming copy of it), rows of the scene "floor", for the summary's
+        linear target: how much of auto's and nbs's growth with N no preparation that reads
+        random-order elements can avoid on this machine."""
+        a = self.a
+        for dim in a.dims:
+            for n in sorted(a.n):
+                tag = f"floor {dim}D N={fmt_n(n)}"
+                log(f"== {tag}")
+                cmd = [f"{self.bin}/nbs_floor", "--n", str(n), "--dim", str(dim),
+                       "--repeats", str(a.repeats), "--min-time", str(a.min_time)]
+                lines, err = self.run_cmd(cmd, "floor-gather", a.timeout)
+                for r in lines:
+                    row = {"scene": "floor", "dim": dim, "order": "random", "N": n,
+                           "fraction": "", "spacing": "", "agree": "n/a",
+                           "nbs_build": self.build_id}
+                    row.update({k: r.get(k, "") for k in COLUMNS if k in r})
+                    row["status"] = r.get("status", "failed")
+                    if row["status"] != "ok":
+                        row["note"] = err[:200]
+                        self.fail(tag, row["tool"], f"status {row['status']} {err[:200]}")
+                    else:
+                        log(f"   {row['tool']:14s} {float(row['ns_per_element']):10.2f} ns/el")
+                    self.rows.append(row)
+
     def fail(self, tag, tool, msg):
         self.failures.append(f"{tag}: {tool}: {msg}")
         log(f"!!!!!!!! {tag}: {tool}: {msg}")
@@ -594,9 +620,18 @@ def summary(rows, n_head):
     for tool in ("nbs-auto", "nbs-nbs"):
         for dim in (3, 2):
             lo, hi = get(tool, dim, n=10 ** 4), get(tool, dim, n=10 ** 7)
+            # what the memory alone adds from 1e4 to 1e7 (nbs_floor), against what the
+            # target allows (0.3 of the time at 1e4)
+            g_lo = get("floor-gather", dim, scene="floor", n=10 ** 4)
+            g_hi = get("floor-gather", dim, scene="floor", n=10 ** 7)
+            floor = ""
+            if lo and g_lo is not None and g_hi is not None:
+                floor = (f"; a bare random gather of the input {f(g_lo)} -> {f(g_hi)} ns "
+                         f"(+{g_hi - g_lo:.1f}), the target allows +{0.3 * lo:.1f}")
             target(f"linear: {tool} {dim}D N=1e7 within 1.3x of N=1e4",
                    None if lo is None or hi is None else hi / lo <= 1.3,
-                   f"{f(lo)} -> {f(hi)} ns, ratio {f'{hi / lo:.2f}' if lo and hi else 'n/a'}")
+                   f"{f(lo)} -> {f(hi)} ns, ratio {f'{hi / lo:.2f}' if lo and hi else 'n/a'}"
+                   + floor)
     n_sc = max([int(r["N"]) for r in rows if r["scene"] in OTHER_SCENES
                 and r["status"] == "ok"] or [0])
     others = compared_scenes(rows)
@@ -644,8 +679,31 @@ def summary(rows, n_head):
     out.append("| target | measured | status |")
     out.append("|---|---|---|")
     out += t
+    out += floors(rows)
     out += consistency(rows)
     return "\n".join(out) + "\n"
+
+
+def floors(rows):
+    """The memory's floor (nbs_floor rows): per element, a random gather of the input and
+    one streaming copy of it, by N."""
+    fl = [r for r in rows if r["scene"] == "floor" and r["status"] == "ok"]
+    if not fl:
+        return []
+    f = lambda x: f"{x:.2f}" if x is not None else "n/a"  # noqa: E731
+    out = ["", "### The memory's floor (nbs_floor)\n",
+           "Per element, without any contact detection: the input (as a caller gives it, "
+           "an element's coordinates side by side) copied to one array per axis in a random "
+           "order, as a preparation that puts random-order elements in cell order must read "
+           "them, and in its own order, one streaming pass. The minimum over the repeats, "
+           "ns per element.\n",
+           "| dim | N | random gather | copy in order |", "|---|---:|---:|---:|"]
+    for dim in (3, 2):
+        for n in sorted({int(r["N"]) for r in fl if r["dim"] == str(dim)}):
+            g = find(fl, tool="floor-gather", dim=dim, N=n)
+            c = find(fl, tool="floor-copy", dim=dim, N=n)
+            out.append(f"| {dim}D | {fmt_n(n)} | {f(nsel(g))} | {f(nsel(c))} |")
+    return out
 
 
 # Differences beyond this between two rows of one configuration mark a disturbed run.
@@ -687,7 +745,7 @@ STYLE = {"nbs-auto": ("C0", "o"), "nbs-auto-2t": ("C0", "1"), "nbs-auto-steps": 
          "nbs-nbs": ("C1", "s"), "nbs-sorting": ("C2", "^"), "nbs-screening": ("C3", "v"),
          "nbs-direct": ("C7", "x"), "nanoflann": ("C4", "D"), "cgal": ("C5", "P"),
          "scipy": ("C6", "*"), "lammps": ("k", "h"), "lammps-nosort": ("C8", "<")}
-SCENE_ORDER = {"uniform": 0, "sparse": 1, "clustered": 2, "huge": 3, "slab": 4}
+SCENE_ORDER = {"uniform": 0, "sparse": 1, "clustered": 2, "huge": 3, "slab": 4, "floor": 5}
 # the scenes compared with uniform (slab: a layer two diameters thick, 2D a strip)
 OTHER_SCENES = ("sparse", "clustered", "huge", "slab")
 
@@ -715,7 +773,8 @@ def plots(rows, out):
 
     ok = [r for r in rows if r["status"] == "ok"]
     present = sorted({r["tool"] for r in ok}, key=tool_rank)
-    tools = [t for t in present if t in STYLE or not re.search(r"-\d+t$", t)]
+    tools = [t for t in present if (t in STYLE or not re.search(r"-\d+t$", t))
+             and not t.startswith("floor-")]
     extra = [t for t in tools if t not in STYLE]
     for k, t in enumerate(extra):
         STYLE[t] = (f"C{k % 10}", "p")
@@ -963,6 +1022,8 @@ def main(argv):
     try:
         for c in plan(a):
             suite.case(*c)
+        if "nbs" in a.tools:
+            suite.floors()
     finally:
         if own_workdir:
             shutil.rmtree(a.workdir, ignore_errors=True)
