@@ -154,8 +154,9 @@
  *
  * With OpenMP the key pass, the radix sort, the gather and the sweep run in parallel; the
  * sweep's threads take contiguous ranges of the cell order, cut at rows' starts or at blocks
- * of a row (nbs__cs_thread_start), and their pairs are concatenated in range order, so the
- * output is identical for any number of threads. Two threads halve the key pass, the
+ * of a row (nbs__cs_thread_start), in chunks that a thread done with its own takes from the
+ * back of another's (nbs__cs_sweep_parts), and their pairs are concatenated in range order,
+ * so the output is identical for any number of threads. Two threads halve the key pass, the
  * gather and the sweep; the radix sort's passes by digit did not scale at all (each reads
  * and writes every key, the machine's memory the limit), so where the keys are
  * many it sorts by the top digit first and then each bucket in cache (nbs__radix). 3D,
@@ -170,6 +171,9 @@
 
 #include <float.h>
 #include <stdlib.h>
+#if defined(_OPENMP)
+#include <stdatomic.h>
+#endif
 /* The AVX-512 and AVX2 kernels where the compiler can target them (NBS__X86_SIMD); the
  * processor is asked at run time. */
 #if NBS__X86_SIMD
@@ -1244,6 +1248,15 @@ int nbs__cellsort_simd(void) {
  * library reports (glibc's sysconf gave 320 MiB of L3 on the benchmark machine, which has
  * 32). The environment variable NBS_PARTITION, read when a context is created, says
  * "always" or "never" instead, for tests and comparisons. */
+/* NBS_SWEEP_STEAL=first in the environment, read when a context is created: each thread
+ * of a threaded sweep first takes the last chunk of the next thread's part, then sweeps its
+ * own (nbs__cs_sweep_parts), so that the tests see chunks taken from other parts, which
+ * otherwise happens only where one thread falls behind. */
+bool nbs__cellsort_steal_first(void) {
+  const char *e = getenv("NBS_SWEEP_STEAL");
+  return e && strcmp(e, "first") == 0;
+}
+
 size_t nbs__cellsort_partition_min(void) {
   const char *e = getenv("NBS_PARTITION");
   if (e && strcmp(e, "always") == 0) return 0;
@@ -2029,6 +2042,16 @@ static nbs_status nbs__cs_sweep(const nbs__cs *c, nbs__sink *out, int32_t from, 
   return nbs__cs_sweep_generic(c, out, from, to);
 }
 
+/* Where a chunk's pairs lie: sinks[sink].buf + at, count of them (offsets, not pointers:
+ * a sink's list may move as it grows). */
+typedef struct nbs__cs_seg {
+  int32_t sink;
+  size_t at, count;
+} nbs__cs_seg;
+
+/* The most chunks of a threaded sweep (nbs__cs_sweep_parts), all parts together. */
+#define NBS__CS_SEGS 256
+
 #if defined(_OPENMP)
 /* Where the part of the sweep that would start at place p starts: at p's row's start, or,
  * in a row longer than a block, at the last of the row's blocks that starts at or before p
@@ -2048,6 +2071,129 @@ static int32_t nbs__cs_thread_start(const nbs__cs *c, int32_t p) {
   const int kx = c->bx + c->ks;
   const int32_t a = nbs__cs_lower(c->key, p, c->key[p] >> kx << kx);
   return a + (p - a) / NBS__CS_LANES * NBS__CS_LANES;
+}
+
+/* The most chunks of a part of the threaded sweep, and the fewest places of a chunk (each
+ * chunk's start costs a search of the rows' windows, as a thread's does). */
+#define NBS__CS_CHUNKS 32
+#define NBS__CS_CHUNK_MIN 8192
+
+/* Chunks of what is left of a part taken, whose state is left (the next chunk from the
+ * front in the low half, the end of those left in the high half): from the back, the last
+ * one; from the front, half of those left (at least one), which the owner sweeps in one
+ * call, so that it starts a range's search rarely. The first chunk taken is returned and
+ * *many their number; -1 if none is left. */
+static int nbs__cs_claim(_Atomic uint64_t *left, bool back, int *many) {
+  uint64_t v = atomic_load_explicit(left, memory_order_relaxed);
+  for (;;) {
+    const uint32_t f = (uint32_t)v, b = (uint32_t)(v >> 32);
+    if (f >= b) return -1;
+    const uint32_t m = back || b - f < 2 ? 1 : (b - f) / 2;
+    const uint64_t w = back ? v - ((uint64_t)1 << 32) : v + m;
+    if (atomic_compare_exchange_weak_explicit(left, &v, w, memory_order_relaxed,
+                                              memory_order_relaxed)) {
+      *many = (int)m;
+      return back ? (int)b - 1 : (int)f;
+    }
+  }
+}
+
+/* Chunks [k, k + many), the places [bound[k], bound[k + many]), swept into sinks[sink];
+ * where their pairs lie to seg[k] (seg[k + 1 ..] hold none). False if the sink failed (no
+ * memory for its list). */
+static bool nbs__cs_sweep_chunk(const nbs__cs *c, nbs__sink *sinks, int32_t sink,
+                                const int32_t *bound, int k, int many, nbs__cs_seg *seg) {
+  nbs__sink *s = &sinks[sink];
+  const size_t at = s->count;
+  if (bound[k] < bound[k + many]) s->status = nbs__cs_sweep(c, s, bound[k], bound[k + many]);
+  for (int j = 0; j < many; j++) {
+    seg[k + j].sink = sink;
+    seg[k + j].at = at;
+    seg[k + j].count = j == 0 ? s->count - at : 0;
+  }
+  return s->status == NBS_OK;
+}
+
+/* The sweep with threads. The cell order is cut into `threads` parts of about equal places
+ * (at nbs__cs_thread_start's places), and each part into chunks the same way; part t is
+ * thread t's (NBS__PARTS). A thread sweeps its part's chunks from the front, then takes
+ * chunks from the back of the part with the most chunks left, until none is left: where
+ * one core runs slower than the other (on this machine's virtual processors, by up to a
+ * half at times: the same detection pinned to each, taskset), the faster one takes on part
+ * of the slower one's share, where the even halves waited for the slower one. Each chunk's
+ * pairs go to the list of the part's owner (the run's own list for part 0), or, taken from
+ * another part, to the taker's (thread 0's: sinks[threads]), and segs says where: the
+ * pairs are the same in the same order whoever sweeps a chunk, since chunks are cut where
+ * threads' ranges were. The run's list holds part 0's first chunks in place; the segments
+ * of the rest, in order, are compacted to the front of segs, and their number returned.
+ * Measured (N = 1e6, two threads, interleaved with the even halves, medians of 4, ns per
+ * element, the same hashes): idle, 3D 15.22 / 15.30 (search 7.66 / 7.79), 2D 8.90 / 8.67;
+ * with a busy loop pinned to the second core (taskset -c 1), 3D 28.06 -> 25.28 (search
+ * 15.72 -> 9.87), 2D 17.01 -> 15.74; on a spell of this machine whose second core ran the
+ * detection 1.45x slower than the first (no load of ours), 3D 22.3 -> 19.1-19.9 (search
+ * 12.1-12.6 -> 9.1-10.1, min of 4). Chunks of one per claim from the front cost the
+ * search 7% idle (3D 7.41 -> 7.92, 2D 2.95 -> 3.18): the owner claims half of what is left.
+ * Tried and left out: the gather's loop by chunks of 16,384 (schedule(dynamic)): idle the
+ * same in 3D (15.57 / 15.59) and 2D 0.3 ns slower, on the slower spell 0.9 faster. */
+static int nbs__cs_sweep_parts(const nbs__cs *c, nbs__sink *sinks, int threads,
+                               nbs__cs_seg *segs) {
+  nbs_context *ctx = c->run->ctx;
+  int stolen = 0;
+  const int32_t n = c->n;
+  int chunks = n / threads / NBS__CS_CHUNK_MIN;
+  if (chunks > NBS__CS_SEGS / threads) chunks = NBS__CS_SEGS / threads;
+  if (chunks > NBS__CS_CHUNKS) chunks = NBS__CS_CHUNKS;
+  if (chunks < 1) chunks = 1;
+  const int total = threads * chunks;
+  int32_t bound[NBS__CS_SEGS + 1];
+  for (int k = 0; k <= total; k++) bound[k] = nbs__cs_thread_start(c, nbs__chunk(n, k, total));
+  _Atomic uint64_t left[NBS__THREADS_MAX];
+  for (int t = 0; t < threads; t++) atomic_init(&left[t], (uint64_t)chunks << 32);
+  memset(segs, 0, (size_t)total * sizeof *segs); /* a failed sweep leaves chunks undone */
+#pragma omp parallel num_threads(threads) reduction(+ : stolen)
+  {
+    bool failed = false;
+    const int me = nbs__thread_num();
+    const int32_t mine = me == 0 ? threads : me; /* the list of the chunks it takes */
+    NBS__PARTS(t, threads) {
+      int j, many;
+      if (ctx->cs_steal_first) { /* the tests': the next part's last chunk first */
+        const int v = (t + 1) % threads;
+        if ((j = nbs__cs_claim(&left[v], true, &many)) >= 0) {
+          failed = !nbs__cs_sweep_chunk(c, sinks, mine, bound, v * chunks + j, 1, segs);
+          stolen++;
+        }
+      }
+      while (!failed && (j = nbs__cs_claim(&left[t], false, &many)) >= 0) {
+        failed = !nbs__cs_sweep_chunk(c, sinks, t, bound, t * chunks + j, many, segs);
+      }
+    }
+    while (!failed) { /* its own parts are done */
+      int v = -1;
+      uint32_t most = 0;
+      for (int t = 0; t < threads; t++) {
+        const uint64_t x = atomic_load_explicit(&left[t], memory_order_relaxed);
+        const uint32_t f = (uint32_t)x, b = (uint32_t)(x >> 32);
+        if (b > f && b - f > most) {
+          most = b - f;
+          v = t;
+        }
+      }
+      if (v < 0) break;
+      int many;
+      const int j = nbs__cs_claim(&left[v], true, &many);
+      if (j >= 0) {
+        failed = !nbs__cs_sweep_chunk(c, sinks, mine, bound, v * chunks + j, 1, segs);
+        stolen++;
+      }
+    }
+  }
+  ctx->cs_stolen = stolen;
+  int m = 0;
+  for (int k = 0; k < total; k++) {
+    if (segs[k].sink != 0 && segs[k].count > 0) segs[m++] = segs[k];
+  }
+  return m;
 }
 #endif
 
@@ -3808,21 +3954,27 @@ size_t nbs__cellsort_bytes(int dim, int32_t n, bool radii, int threads) {
 /* Below this many elements per thread, one thread is faster. */
 #define NBS__CS_MIN_PER_THREAD 20000
 
-/* The pairs of threads 1, 2, ... copied to dst one after the other (`more` in all), each
- * thread copying an equal share of them: one thread alone could not keep the machine's
- * memory busy (3D, N = 1e6, two threads: 0.55 -> 0.30 ns per element). */
-static void nbs__cs_append(nbs_pair *dst, const nbs__sink *sinks, int threads, size_t more) {
+/* The chunks' pairs that are not in place (segs[0 .. nsegs), in order, `more` pairs in all)
+ * copied to dst one after the other, each thread copying an equal share of them: one thread
+ * alone could not keep the machine's memory busy (3D, N = 1e6, two threads: 0.55 -> 0.30 ns
+ * per element). */
+static void nbs__cs_append(nbs_pair *dst, const nbs__sink *sinks, const nbs__cs_seg *segs,
+                           int nsegs, int threads, size_t more) {
 #if defined(_OPENMP)
 #pragma omp parallel num_threads(threads)
 #endif
   NBS__PARTS(t, threads) {
     const size_t a = more * (size_t)t / (size_t)threads;
     const size_t b = more * (size_t)(t + 1) / (size_t)threads;
-    size_t at = 0; /* where source s starts in dst */
-    for (int s = 1; s < threads && at < b; s++) {
-      const size_t s0 = at > a ? at : a, s1 = at + sinks[s].count < b ? at + sinks[s].count : b;
-      if (s0 < s1) memcpy(dst + s0, sinks[s].buf + (s0 - at), (s1 - s0) * sizeof *dst);
-      at += sinks[s].count;
+    size_t at = 0; /* where segment k starts in dst */
+    for (int k = 0; k < nsegs && at < b; k++) {
+      const size_t s0 = at > a ? at : a;
+      const size_t s1 = at + segs[k].count < b ? at + segs[k].count : b;
+      if (s0 < s1) {
+        memcpy(dst + s0, sinks[segs[k].sink].buf + segs[k].at + (s0 - at),
+               (s1 - s0) * sizeof *dst);
+      }
+      at += segs[k].count;
     }
   }
 }
@@ -4295,39 +4447,37 @@ nbs_status nbs__cellsort(nbs__run *run) {
     ctx->cs_kept_ok = true;
   }
 
-  /* 4. sweep: thread t takes the elements [n t / T, n (t + 1) / T) of the cell order */
+  /* 4. sweep: in one range, or by threads in parts of chunks (nbs__cs_sweep_parts) */
   nbs__search_begins(run);
-  nbs__sink sinks[NBS__THREADS_MAX];
-  for (int t = 0; t < threads; t++) {
+  nbs__sink sinks[NBS__THREADS_MAX + 1]; /* each part's; [threads]: thread 0's steals */
+  for (int t = 0; t <= threads; t++) {
     memset(&sinks[t], 0, sizeof sinks[t]);
     sinks[t].ctx = ctx;
-    sinks[t].thread = t;
+    sinks[t].thread = t == threads ? 0 : t;
     if (t == 0) {
       sinks[t].run = run;
       sinks[t].buf = run->buf;
       sinks[t].count = run->count;
       sinks[t].cap = run->cap;
     } else {
-      sinks[t].buf = ctx->tpairs[t];
-      sinks[t].cap = ctx->tcap[t];
+      sinks[t].buf = ctx->tpairs[sinks[t].thread];
+      sinks[t].cap = ctx->tcap[sinks[t].thread];
     }
   }
+  nbs__cs_seg segs[NBS__CS_SEGS];
+  int nsegs = 0;
+  ctx->cs_stolen = 0;
   if (threads == 1) {
     sinks[0].status = nbs__cs_sweep(&c, &sinks[0], 0, n);
   } else {
 #if defined(_OPENMP)
-#pragma omp parallel num_threads(threads)
-    NBS__PARTS(t, threads) {
-      int32_t from = nbs__cs_thread_start(&c, nbs__chunk(n, t, threads));
-      int32_t to = nbs__cs_thread_start(&c, nbs__chunk(n, t + 1, threads));
-      sinks[t].status = nbs__cs_sweep(&c, &sinks[t], from, to);
-    }
+    nsegs = nbs__cs_sweep_parts(&c, sinks, threads, segs);
 #endif
   }
-  /* the run's sink first, then each thread's pairs in order */
+  /* the run's sink holds part 0's first chunks in place; the other chunks follow in order */
   run->count = sinks[0].count;
   nbs_status st = sinks[0].status;
-  for (int t = 0; t < threads; t++) {
+  for (int t = 0; t <= threads; t++) {
     run->candidates += sinks[t].candidates;
     run->emitted += sinks[t].emitted;
     if (st == NBS_OK) st = sinks[t].status;
@@ -4336,12 +4486,12 @@ nbs_status nbs__cellsort(nbs__run *run) {
     st = nbs__fail(ctx, NBS_ERR_NOMEM, -1, "cannot grow a thread's pair list");
   }
   size_t more = 0;
-  for (int t = 1; t < threads; t++) more += sinks[t].count;
+  for (int k = 0; k < nsegs; k++) more += segs[k].count;
   if (st == NBS_OK && more > 0) {
     bool room; /* always: threads > 1 only without callbacks and max_pairs */
     st = nbs__room(run, more, &room);
     if (st == NBS_OK) {
-      nbs__cs_append(run->buf + run->count, sinks, threads, more);
+      nbs__cs_append(run->buf + run->count, sinks, segs, nsegs, threads, more);
       run->count += more;
     }
   }

@@ -281,6 +281,7 @@ nbs_status nbs_context_create(const nbs_context_def *def, nbs_context **out) {
   ctx->threads = d.threads;
   ctx->simd = nbs__cellsort_simd();
   ctx->cs_part_min = nbs__cellsort_partition_min();
+  ctx->cs_steal_first = nbs__cellsort_steal_first();
   ctx->bytes = ctx->peak_bytes = sizeof *ctx;
   ctx->error_element = -1;
   ctx->cs_outliers = -1;

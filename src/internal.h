@@ -152,6 +152,11 @@ struct nbs_context {
    * whether the last from-scratch detection took it (read by the tests). */
   size_t cs_part_min;
   bool cs_partitioned;
+  /* cellsort's threaded sweep (nbs__cs_sweep_parts): the chunks the last detection's threads
+   * took from other threads' parts (read by the tests), and NBS_SWEEP_STEAL=first, which
+   * makes every thread take one first (nbs__cellsort_steal_first). */
+  int cs_stolen;
+  bool cs_steal_first;
   /* The caller's coordinate of each axis of the last cellsort or nbs detection, in the
    * algorithm's order: cellsort's key x (the rows), y, z; nbs's x-, y- and z-lists (2D: x-
    * and y-lists). Which axis takes which place changes the speed, never the pairs' set
@@ -434,6 +439,7 @@ nbs__twice4(const int32_t *p) {
 }
 #endif
 size_t nbs__cellsort_partition_min(void);
+bool nbs__cellsort_steal_first(void);
 
 /* Work-block layouts, for work_kind. */
 enum { NBS__WORK_NONE = 0, NBS__WORK_SCREENING = 1, NBS__WORK_SORTING = 2, NBS__WORK_NBS = 3,

@@ -270,51 +270,67 @@ static void test_repeat_runs(void) {
 /* Threads: cellsort and auto give the same bytes, in the same order, for every thread
  * count (and with a callback or max_pairs, which keep them on one thread). The scenes are
  * large enough (60000 elements) for cellsort to use threads: a square (cube) and a strip
- * (rod), whose threads start and end inside its few long rows. Without OpenMP the thread
- * count is ignored and the comparison still holds. */
+ * (rod), whose threads start and end inside its few long rows. The threads' sweep takes
+ * chunks from another's part where one falls behind, which a run may or may not see; with
+ * NBS_SWEEP_STEAL=first (steal = 1) every thread first takes the last chunk of the next
+ * one's part, whose pairs must still land in their place, and some must have been taken.
+ * Without OpenMP the thread count is ignored and the comparison still holds. */
+static void test_thread_shape(const int *counts, size_t ncounts, int shape, long *stolen) {
+  const int dim = 2 + shape % 2;
+  const bool strip = shape >= 2;
+  scene s = strip ? det_scene(DET_STRIP, dim, 60000, dim == 2 ? 40000.0 : 15000.0, 0.0, 22)
+                  : det_scene(DET_QUANTIZED, dim, 60000, dim == 2 ? 300.0 : 45.0, 0.0, 21);
+  const char *what = strip ? "strip" : "square";
+  const nbs_algorithm algos[] = {NBS_CELLSORT, NBS_AUTO};
+  for (size_t a = 0; a < 2; a++) {
+    for (int mode = 0; mode < 2; mode++) {
+      pair_list ref = {NULL, 0};
+      for (size_t t = 0; t < ncounts; t++) {
+        nbs_context_def cdef = nbs_default_context_def();
+        cdef.threads = counts[t];
+        nbs_context *ctx;
+        ASSERT_OK(nbs_context_create(&cdef, &ctx));
+        pair_list got, again, viacb;
+        ASSERT_OK(detect_raw(ctx, &s, algos[a], (nbs_mode)mode, &got));
+        *stolen += ctx->cs_stolen;
+        ASSERT_OK(detect_raw(ctx, &s, algos[a], (nbs_mode)mode, &again));
+        ASSERT_OK(detect_callback(ctx, &s, algos[a], (nbs_mode)mode, &viacb));
+        if (t == 0) {
+          CHECK_MSG(got.count > (size_t)s.n / 2, "%dD %s: only %zu pairs", dim, what,
+                    got.count);
+          ref = got;
+          got.p = NULL;
+        } else {
+          CHECK_MSG(same_bytes(&got, &ref), "%dD %s %s mode %d: %d threads differ from 1",
+                    dim, what, nbs_algorithm_name(algos[a]), mode, counts[t]);
+        }
+        CHECK_MSG(same_bytes(&again, &ref), "%dD %s %s mode %d, %d threads: a repeat differs",
+                  dim, what, nbs_algorithm_name(algos[a]), mode, counts[t]);
+        CHECK_MSG(same_bytes(&viacb, &ref), "%dD %s %s mode %d, %d threads: the callback "
+                  "differs", dim, what, nbs_algorithm_name(algos[a]), mode, counts[t]);
+        free(got.p);
+        pair_list_free(&again);
+        pair_list_free(&viacb);
+        nbs_context_destroy(ctx);
+      }
+      pair_list_free(&ref);
+    }
+  }
+  scene_free(&s);
+}
+
 static void test_thread_counts(void) {
   const int counts[] = {1, 2, 3, 4, 7, 8};
-  for (int shape = 0; shape < 4; shape++) {
-    const int dim = 2 + shape % 2;
-    const bool strip = shape >= 2;
-    scene s = strip ? det_scene(DET_STRIP, dim, 60000, dim == 2 ? 40000.0 : 15000.0, 0.0, 22)
-                    : det_scene(DET_QUANTIZED, dim, 60000, dim == 2 ? 300.0 : 45.0, 0.0, 21);
-    const char *what = strip ? "strip" : "square";
-    const nbs_algorithm algos[] = {NBS_CELLSORT, NBS_AUTO};
-    for (size_t a = 0; a < 2; a++) {
-      for (int mode = 0; mode < 2; mode++) {
-        pair_list ref = {NULL, 0};
-        for (size_t t = 0; t < sizeof counts / sizeof *counts; t++) {
-          nbs_context_def cdef = nbs_default_context_def();
-          cdef.threads = counts[t];
-          nbs_context *ctx;
-          ASSERT_OK(nbs_context_create(&cdef, &ctx));
-          pair_list got, again, viacb;
-          ASSERT_OK(detect_raw(ctx, &s, algos[a], (nbs_mode)mode, &got));
-          ASSERT_OK(detect_raw(ctx, &s, algos[a], (nbs_mode)mode, &again));
-          ASSERT_OK(detect_callback(ctx, &s, algos[a], (nbs_mode)mode, &viacb));
-          if (t == 0) {
-            CHECK_MSG(got.count > (size_t)s.n / 2, "%dD %s: only %zu pairs", dim, what,
-                      got.count);
-            ref = got;
-            got.p = NULL;
-          } else {
-            CHECK_MSG(same_bytes(&got, &ref), "%dD %s %s mode %d: %d threads differ from 1",
-                      dim, what, nbs_algorithm_name(algos[a]), mode, counts[t]);
-          }
-          CHECK_MSG(same_bytes(&again, &ref), "%dD %s %s mode %d, %d threads: a repeat differs",
-                    dim, what, nbs_algorithm_name(algos[a]), mode, counts[t]);
-          CHECK_MSG(same_bytes(&viacb, &ref), "%dD %s %s mode %d, %d threads: the callback "
-                    "differs", dim, what, nbs_algorithm_name(algos[a]), mode, counts[t]);
-          free(got.p);
-          pair_list_free(&again);
-          pair_list_free(&viacb);
-          nbs_context_destroy(ctx);
-        }
-        pair_list_free(&ref);
-      }
+  for (int steal = 0; steal < 2; steal++) {
+    if (steal) ASSERT_TRUE(setenv("NBS_SWEEP_STEAL", "first", 1) == 0);
+    long stolen = 0;
+    for (int shape = 0; shape < 4; shape++) {
+      test_thread_shape(counts, sizeof counts / sizeof *counts, shape, &stolen);
     }
-    scene_free(&s);
+    unsetenv("NBS_SWEEP_STEAL");
+#if defined(_OPENMP)
+    if (steal) CHECK_MSG(stolen > 0, "NBS_SWEEP_STEAL=first: no chunk taken from another part");
+#endif
   }
 }
 
