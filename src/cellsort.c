@@ -156,7 +156,9 @@
  * sweep's threads take contiguous ranges of the cell order, cut at rows' starts or at blocks
  * of a row (nbs__cs_thread_start), in chunks that a thread done with its own takes from the
  * back of another's (nbs__cs_sweep_parts), and their pairs are concatenated in range order,
- * so the output is identical for any number of threads. Two threads halve the key pass, the
+ * so the output is identical for any number of threads. The gather and the sort's buckets
+ * are shared the same way (nbs__share), so that a core slower than the other at the time
+ * does less of them. Two threads halve the key pass, the
  * gather and the sweep; the radix sort's passes by digit did not scale at all (each reads
  * and writes every key, the machine's memory the limit), so where the keys are
  * many it sorts by the top digit first and then each bucket in cache (nbs__radix). 3D,
@@ -384,6 +386,96 @@ static uint32_t nbs__radix_offsets(uint32_t *hist, size_t buckets, int threads,
   if (top) top[buckets] = sum;
   return most;
 }
+
+/* ---- work shared by threads: a part each, then the rest taken from the back --------- */
+
+#if defined(_OPENMP)
+/* Items [0, n) cut into parts, part t thread t's (NBS__PARTS), each taken in ranges: by its
+ * owner from the front, then by any thread done with its own parts from the back of the
+ * part with the most left. Where one core runs slower than the other (this machine's
+ * virtual cores ran the same work up to 1.45x apart at times; with another process on one
+ * core, about twice), the faster one takes on part of the slower one's share, where even
+ * halves waited for the slower one; on cores alike each thread does its own part, as
+ * before. Used where the result does not depend on which thread does which range: the
+ * buckets' sorts, the gather, and the sweep's chunks (whose pairs are placed by chunk). */
+typedef struct nbs__share {
+  /* part t: its next item from the front (low half), the end of those left (high half) */
+  _Atomic uint64_t left[NBS__THREADS_MAX];
+  int parts;
+  /* the tests' (NBS_STEAL=first, nbs__cellsort_steal_first): each thread first takes the
+   * last range of the next part, so that ranges taken from others' parts are seen */
+  bool first;
+} nbs__share;
+
+/* Part t is the items [cut[t], cut[t + 1]). */
+static void nbs__share_init(nbs__share *s, int parts, const uint32_t *cut, bool first) {
+  s->parts = parts;
+  s->first = first;
+  for (int t = 0; t < parts; t++) {
+    atomic_init(&s->left[t], (uint64_t)cut[t] | (uint64_t)cut[t + 1] << 32);
+  }
+}
+
+/* The next range [*a, *b) of part t from its front: grain items, or with `half`, half of
+ * what is left where that is more (an owner's long runs start few loops); false if none is
+ * left. */
+static bool nbs__share_front(nbs__share *s, int t, uint32_t grain, bool half, uint32_t *a,
+                             uint32_t *b) {
+  uint64_t v = atomic_load_explicit(&s->left[t], memory_order_relaxed);
+  for (;;) {
+    const uint32_t f = (uint32_t)v, e = (uint32_t)(v >> 32);
+    if (f >= e) return false;
+    uint32_t m = half && (e - f) / 2 > grain ? (e - f) / 2 : grain;
+    if (m > e - f) m = e - f;
+    if (atomic_compare_exchange_weak_explicit(&s->left[t], &v, v + m, memory_order_relaxed,
+                                              memory_order_relaxed)) {
+      *a = f;
+      *b = f + m;
+      return true;
+    }
+  }
+}
+
+/* The last grain items (or fewer) left of part t: false if none is left. */
+static bool nbs__share_back_of(nbs__share *s, int t, uint32_t grain, uint32_t *a,
+                               uint32_t *b) {
+  uint64_t v = atomic_load_explicit(&s->left[t], memory_order_relaxed);
+  for (;;) {
+    const uint32_t f = (uint32_t)v, e = (uint32_t)(v >> 32);
+    if (f >= e) return false;
+    const uint32_t m = e - f < grain ? e - f : grain;
+    if (atomic_compare_exchange_weak_explicit(&s->left[t], &v, v - ((uint64_t)m << 32),
+                                              memory_order_relaxed, memory_order_relaxed)) {
+      *a = e - m;
+      *b = e;
+      return true;
+    }
+  }
+}
+
+/* The last grain items left of the part with the most left, to *part: false once none is
+ * left of any. */
+static bool nbs__share_back(nbs__share *s, uint32_t grain, int *part, uint32_t *a,
+                            uint32_t *b) {
+  for (;;) {
+    int v = -1;
+    uint32_t most = 0;
+    for (int t = 0; t < s->parts; t++) {
+      const uint64_t x = atomic_load_explicit(&s->left[t], memory_order_relaxed);
+      const uint32_t f = (uint32_t)x, e = (uint32_t)(x >> 32);
+      if (e > f && e - f > most) {
+        most = e - f;
+        v = t;
+      }
+    }
+    if (v < 0) return false;
+    if (nbs__share_back_of(s, v, grain, a, b)) {
+      *part = v;
+      return true;
+    }
+  }
+}
+#endif
 
 /* Whether n packed keys of the digits dg are sorted by the top digit first, and then each
  * bucket in cache (nbs__radix, and the partition, nbs__cs_partition): where there are two
@@ -618,9 +710,20 @@ static void nbs__radix_local(uint64_t *a, uint64_t *out, uint64_t *other, int32_
  * instead of 256 of 3,900; 2D 25 bits: 512 instead of 128 buckets, whose 7,800 keys do not
  * fit L1): no faster (interleaved, min of 6, 33.2 / 33.3 and 19.6 / 19.5). On Zen 5 the
  * top digit is the widest where the input is not in cell order (nbs__radix_top). */
+/* Bucket b of the top digit's pass (top[b] .. top[b + 1] of dk) sorted by the digits lo
+ * below it into out_k, with the histogram h, through `mine` (a thread's scratch of the
+ * largest bucket) or else the other array's place of the bucket. */
+static void nbs__radix_bucket(uint64_t *sk, uint64_t *dk, uint64_t *out_k, const uint32_t *top,
+                              size_t b, int low, nbs__digits lo, uint32_t *h, uint64_t *mine) {
+  if (top[b + 1] == top[b]) return;
+  const uint32_t s0 = top[b];
+  uint64_t *other = mine ? mine : dk == out_k ? sk + s0 : dk + s0;
+  nbs__radix_local(dk + s0, out_k + s0, other, (int32_t)(top[b + 1] - s0), low, lo, h);
+}
+
 static void nbs__radix(uint64_t *sk, int32_t *si, uint64_t *dk, int32_t *di, uint64_t *out_k,
                        int32_t *out_i, int32_t n, int low, nbs__digits dg, uint32_t *hist,
-                       int threads, uint64_t *scratch, size_t scratch_words) {
+                       int threads, bool first, uint64_t *scratch, size_t scratch_words) {
   if (!si && nbs__radix_top_first(n, dg)) {
     uint32_t top[((size_t)1 << NBS__RADIX_BITS) + 1];
     nbs__digits lo, td; /* the digits below the top one, and the top one */
@@ -631,21 +734,42 @@ static void nbs__radix(uint64_t *sk, int32_t *si, uint64_t *dk, int32_t *di, uin
         if (top[b + 1] - top[b] > most) most = top[b + 1] - top[b];
       }
       if ((size_t)threads * most > scratch_words) scratch = NULL;
-      /* each thread sorts the buckets that start in its part */
+      /* each thread sorts the buckets that start in its part, then takes others' from the
+       * back (nbs__share); its histogram and scratch are its own in the team */
 #if defined(_OPENMP)
-#pragma omp parallel num_threads(threads) if (threads > 1)
-#endif
-      NBS__PARTS(t, threads) {
-        const uint32_t from = (uint32_t)nbs__chunk(n, t, threads);
-        const uint32_t to = (uint32_t)nbs__chunk(n, t + 1, threads);
-        uint32_t *h = hist + (size_t)t * lo.buckets;
-        uint64_t *mine = scratch ? scratch + (size_t)t * most : NULL;
-        for (size_t b = 0; b < td.buckets; b++) {
-          if (top[b] < from || top[b] >= to || top[b + 1] == top[b]) continue;
-          const uint32_t s0 = top[b];
-          uint64_t *other = mine ? mine : dk == out_k ? sk + s0 : dk + s0;
-          nbs__radix_local(dk + s0, out_k + s0, other, (int32_t)(top[b + 1] - s0), low, lo, h);
+      if (threads > 1) {
+      uint32_t cut[NBS__THREADS_MAX + 1];
+      for (int t = 0, b = 0; t <= threads; t++) {
+        const uint32_t from = t == threads ? (uint32_t)n : (uint32_t)nbs__chunk(n, t, threads);
+        while ((size_t)b < td.buckets && top[b] < from) b++;
+        cut[t] = (uint32_t)b;
+      }
+      nbs__share sh;
+      nbs__share_init(&sh, threads, cut, first);
+#pragma omp parallel num_threads(threads)
+      {
+        const int me = nbs__thread_num();
+        uint32_t *h = hist + (size_t)me * lo.buckets;
+        uint64_t *mine = scratch ? scratch + (size_t)me * most : NULL;
+        uint32_t a, b;
+        int v;
+        NBS__PARTS(t, threads) {
+          if (sh.first && nbs__share_back_of(&sh, (t + 1) % threads, 1, &a, &b)) {
+            nbs__radix_bucket(sk, dk, out_k, top, a, low, lo, h, mine);
+          }
+          while (nbs__share_front(&sh, t, 1, false, &a, &b)) {
+            nbs__radix_bucket(sk, dk, out_k, top, a, low, lo, h, mine);
+          }
         }
+        while (nbs__share_back(&sh, 1, &v, &a, &b)) {
+          nbs__radix_bucket(sk, dk, out_k, top, a, low, lo, h, mine);
+        }
+      }
+      return;
+      }
+#endif
+      for (size_t b = 0; b < td.buckets; b++) {
+        nbs__radix_bucket(sk, dk, out_k, top, b, low, lo, hist, scratch);
       }
       return;
     }
@@ -1248,12 +1372,13 @@ int nbs__cellsort_simd(void) {
  * library reports (glibc's sysconf gave 320 MiB of L3 on the benchmark machine, which has
  * 32). The environment variable NBS_PARTITION, read when a context is created, says
  * "always" or "never" instead, for tests and comparisons. */
-/* NBS_SWEEP_STEAL=first in the environment, read when a context is created: each thread
- * of a threaded sweep first takes the last chunk of the next thread's part, then sweeps its
- * own (nbs__cs_sweep_parts), so that the tests see chunks taken from other parts, which
- * otherwise happens only where one thread falls behind. */
+/* NBS_STEAL=first in the environment, read when a context is created: in the work the
+ * threads share (nbs__share: the sweep's chunks, the gather, the sort's buckets) each thread
+ * first takes the last range of the next thread's part, then does its own, so that the
+ * tests see ranges taken from other parts, which otherwise happens only where one thread
+ * falls behind. */
 bool nbs__cellsort_steal_first(void) {
-  const char *e = getenv("NBS_SWEEP_STEAL");
+  const char *e = getenv("NBS_STEAL");
   return e && strcmp(e, "first") == 0;
 }
 
@@ -2078,26 +2203,6 @@ static int32_t nbs__cs_thread_start(const nbs__cs *c, int32_t p) {
 #define NBS__CS_CHUNKS 32
 #define NBS__CS_CHUNK_MIN 8192
 
-/* Chunks of what is left of a part taken, whose state is left (the next chunk from the
- * front in the low half, the end of those left in the high half): from the back, the last
- * one; from the front, half of those left (at least one), which the owner sweeps in one
- * call, so that it starts a range's search rarely. The first chunk taken is returned and
- * *many their number; -1 if none is left. */
-static int nbs__cs_claim(_Atomic uint64_t *left, bool back, int *many) {
-  uint64_t v = atomic_load_explicit(left, memory_order_relaxed);
-  for (;;) {
-    const uint32_t f = (uint32_t)v, b = (uint32_t)(v >> 32);
-    if (f >= b) return -1;
-    const uint32_t m = back || b - f < 2 ? 1 : (b - f) / 2;
-    const uint64_t w = back ? v - ((uint64_t)1 << 32) : v + m;
-    if (atomic_compare_exchange_weak_explicit(left, &v, w, memory_order_relaxed,
-                                              memory_order_relaxed)) {
-      *many = (int)m;
-      return back ? (int)b - 1 : (int)f;
-    }
-  }
-}
-
 /* Chunks [k, k + many), the places [bound[k], bound[k + many]), swept into sinks[sink];
  * where their pairs lie to seg[k] (seg[k + 1 ..] hold none). False if the sink failed (no
  * memory for its list). */
@@ -2117,10 +2222,11 @@ static bool nbs__cs_sweep_chunk(const nbs__cs *c, nbs__sink *sinks, int32_t sink
 /* The sweep with threads. The cell order is cut into `threads` parts of about equal places
  * (at nbs__cs_thread_start's places), and each part into chunks the same way; part t is
  * thread t's (NBS__PARTS). A thread sweeps its part's chunks from the front, then takes
- * chunks from the back of the part with the most chunks left, until none is left: where
- * one core runs slower than the other (on this machine's virtual processors, by up to a
- * half at times: the same detection pinned to each, taskset), the faster one takes on part
- * of the slower one's share, where the even halves waited for the slower one. Each chunk's
+ * chunks from the back of the part with the most chunks left, until none is left
+ * (nbs__share): where one core runs slower than the other (on this machine's virtual
+ * processors, by up to a half at times: the same detection pinned to each, taskset), the
+ * faster one takes on part of the slower one's share, where the even halves waited for the
+ * slower one. Each chunk's
  * pairs go to the list of the part's owner (the run's own list for part 0), or, taken from
  * another part, to the taker's (thread 0's: sinks[threads]), and segs says where: the
  * pairs are the same in the same order whoever sweeps a chunk, since chunks are cut where
@@ -2147,45 +2253,31 @@ static int nbs__cs_sweep_parts(const nbs__cs *c, nbs__sink *sinks, int threads,
   const int total = threads * chunks;
   int32_t bound[NBS__CS_SEGS + 1];
   for (int k = 0; k <= total; k++) bound[k] = nbs__cs_thread_start(c, nbs__chunk(n, k, total));
-  _Atomic uint64_t left[NBS__THREADS_MAX];
-  for (int t = 0; t < threads; t++) atomic_init(&left[t], (uint64_t)chunks << 32);
+  uint32_t cut[NBS__THREADS_MAX + 1];
+  for (int t = 0; t <= threads; t++) cut[t] = (uint32_t)(t * chunks);
+  nbs__share sh;
+  nbs__share_init(&sh, threads, cut, ctx->cs_steal_first);
   memset(segs, 0, (size_t)total * sizeof *segs); /* a failed sweep leaves chunks undone */
 #pragma omp parallel num_threads(threads) reduction(+ : stolen)
   {
     bool failed = false;
     const int me = nbs__thread_num();
     const int32_t mine = me == 0 ? threads : me; /* the list of the chunks it takes */
+    uint32_t a, b;
     NBS__PARTS(t, threads) {
-      int j, many;
-      if (ctx->cs_steal_first) { /* the tests': the next part's last chunk first */
-        const int v = (t + 1) % threads;
-        if ((j = nbs__cs_claim(&left[v], true, &many)) >= 0) {
-          failed = !nbs__cs_sweep_chunk(c, sinks, mine, bound, v * chunks + j, 1, segs);
-          stolen++;
-        }
-      }
-      while (!failed && (j = nbs__cs_claim(&left[t], false, &many)) >= 0) {
-        failed = !nbs__cs_sweep_chunk(c, sinks, t, bound, t * chunks + j, many, segs);
-      }
-    }
-    while (!failed) { /* its own parts are done */
-      int v = -1;
-      uint32_t most = 0;
-      for (int t = 0; t < threads; t++) {
-        const uint64_t x = atomic_load_explicit(&left[t], memory_order_relaxed);
-        const uint32_t f = (uint32_t)x, b = (uint32_t)(x >> 32);
-        if (b > f && b - f > most) {
-          most = b - f;
-          v = t;
-        }
-      }
-      if (v < 0) break;
-      int many;
-      const int j = nbs__cs_claim(&left[v], true, &many);
-      if (j >= 0) {
-        failed = !nbs__cs_sweep_chunk(c, sinks, mine, bound, v * chunks + j, 1, segs);
+      /* the tests': the next part's last chunk first */
+      if (sh.first && nbs__share_back_of(&sh, (t + 1) % threads, 1, &a, &b)) {
+        failed = !nbs__cs_sweep_chunk(c, sinks, mine, bound, (int)a, 1, segs);
         stolen++;
       }
+      while (!failed && nbs__share_front(&sh, t, 1, true, &a, &b)) {
+        failed = !nbs__cs_sweep_chunk(c, sinks, t, bound, (int)a, (int)(b - a), segs);
+      }
+    }
+    int v;
+    while (!failed && nbs__share_back(&sh, 1, &v, &a, &b)) { /* its own parts are done */
+      failed = !nbs__cs_sweep_chunk(c, sinks, mine, bound, (int)a, 1, segs);
+      stolen++;
     }
   }
   ctx->cs_stolen = stolen;
@@ -2914,11 +3006,46 @@ static bool nbs__cs_warm(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
     j += out[t];
   }
   nbs__radix(spare, NULL, spare + limit, NULL, spare, NULL, (int32_t)m, 0,
-             nbs__radix_digits(bits + eb), hist, 1, NULL, 0);
+             nbs__radix_digits(bits + eb), hist, 1, false, NULL, 0);
   nbs__cs_warm_merge(c, run, spare, places, ins, m);
   *moved = m;
   return true;
 }
+
+/* The large inputs' gather of the places [from, to), prefetching ahead (to n: the places
+ * past `to` are read by whoever gathers them). */
+static void nbs__cs_gather_range(const nbs__cs *c, const nbs__run *run, bool ends,
+                                 int32_t from, int32_t to) {
+  const int32_t n = c->n;
+  const int dim = c->dim;
+  const double *x = run->x;
+  const uint64_t emask = c->imask;
+  const bool packed = c->idx == NULL;
+  /* the arrays in restrict locals, as in the small inputs' gather: read through c at every
+   * element, this loop took 0.3-0.9 ns per element more (3D, Zen 5, interleaved, min of 4:
+   * N = 1e7 26.43 -> 25.83, 1e6 23.95 -> 23.66; 2D 1e6 12.77 / 12.69). Tried and left out:
+   * the coordinates put 8 at a time in a line of each array with a streaming store (the
+   * line is then not read from memory before it is written): N = 1e6 the same (prepare 9.4-
+   * 9.5 against 9.6-9.8 ns per element, three runs), 1e7 0.2-0.6 less (10.0-10.6 against
+   * 10.5-11.2, six runs), too little for a loop of its own per dimension, radii and thread
+   * count. */
+  double *restrict xs = c->xs, *restrict ys = c->ys, *restrict zs = c->zs;
+  double *restrict rs = c->rs;
+  const double *r = run->r;
+  const uint64_t *restrict kr = c->key;
+  const int32_t *restrict idx = c->idx;
+  for (int32_t p = from; p < to; p++) {
+    /* ask for the elements a few iterations ahead: the reads are random */
+    const int32_t pa = p + NBS__CS_AHEAD < n ? p + NBS__CS_AHEAD : p;
+    const int32_t pn = p + NBS__CS_NEAR < n ? p + NBS__CS_NEAR : p;
+    nbs__cs_prefetch(x, r, dim, ends, packed ? (int32_t)(kr[pa] & emask) : idx[pa],
+                     packed ? (int32_t)(kr[pn] & emask) : idx[pn]);
+    nbs__cs_place(xs, ys, zs, rs, x, r, dim, p, packed ? (int32_t)(kr[p] & emask) : idx[p]);
+  }
+}
+
+/* The fewest places a thread takes from another's part of the gather (nbs__share). */
+#define NBS__CS_GATHER_GRAIN 16384
 
 /* Step 3, the gather: place p of the cell order takes the coordinates (and radius) of the
  * element of word p, from key[] (idx[] for unpacked keys); or, where src is not NULL, of
@@ -2986,30 +3113,33 @@ static void nbs__cs_gather(const nbs__cs *c, const nbs__run *run, const uint64_t
     }
     return;
   }
-  /* the arrays in restrict locals, as in the small inputs' gather: read through c at every
-   * element, this loop took 0.3-0.9 ns per element more (3D, Zen 5, interleaved, min of 4:
-   * N = 1e7 26.43 -> 25.83, 1e6 23.95 -> 23.66; 2D 1e6 12.77 / 12.69). Tried and left out:
-   * the coordinates put 8 at a time in a line of each array with a streaming store (the
-   * line is then not read from memory before it is written): N = 1e6 the same (prepare 9.4-
-   * 9.5 against 9.6-9.8 ns per element, three runs), 1e7 0.2-0.6 less (10.0-10.6 against
-   * 10.5-11.2, six runs), too little for a loop of its own per dimension, radii and thread
-   * count. */
-  double *restrict xs = c->xs, *restrict ys = c->ys, *restrict zs = c->zs;
-  double *restrict rs = c->rs;
-  const double *r = run->r;
-  const uint64_t *restrict kr = key;
-  const int32_t *restrict idx = c->idx;
 #if defined(_OPENMP)
-#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
-#endif
-  for (int32_t p = 0; p < n; p++) {
-    /* ask for the elements a few iterations ahead: the reads are random */
-    const int32_t pa = p + NBS__CS_AHEAD < n ? p + NBS__CS_AHEAD : p;
-    const int32_t pn = p + NBS__CS_NEAR < n ? p + NBS__CS_NEAR : p;
-    nbs__cs_prefetch(x, r, dim, ends, packed ? (int32_t)(kr[pa] & emask) : idx[pa],
-                     packed ? (int32_t)(kr[pn] & emask) : idx[pn]);
-    nbs__cs_place(xs, ys, zs, rs, x, r, dim, p, packed ? (int32_t)(kr[p] & emask) : idx[p]);
+  if (threads > 1) {
+  /* halves, the rest taken from the back by the thread done first (nbs__share) */
+  uint32_t cut[NBS__THREADS_MAX + 1];
+  for (int t = 0; t <= threads; t++) cut[t] = (uint32_t)nbs__chunk(n, t, threads);
+  nbs__share sh;
+  nbs__share_init(&sh, threads, cut, run->ctx->cs_steal_first);
+#pragma omp parallel num_threads(threads)
+  {
+    uint32_t a, b;
+    int v;
+    NBS__PARTS(t, threads) {
+      if (sh.first && nbs__share_back_of(&sh, (t + 1) % threads, NBS__CS_GATHER_GRAIN, &a, &b)) {
+        nbs__cs_gather_range(c, run, ends, (int32_t)a, (int32_t)b);
+      }
+      while (nbs__share_front(&sh, t, NBS__CS_GATHER_GRAIN, true, &a, &b)) {
+        nbs__cs_gather_range(c, run, ends, (int32_t)a, (int32_t)b);
+      }
+    }
+    while (nbs__share_back(&sh, NBS__CS_GATHER_GRAIN, &v, &a, &b)) {
+      nbs__cs_gather_range(c, run, ends, (int32_t)a, (int32_t)b);
+    }
   }
+  return;
+  }
+#endif
+  nbs__cs_gather_range(c, run, ends, 0, n);
 }
 
 /* keys[e] = the key of element e in the order of key[], whose words' low half is the
@@ -3126,8 +3256,8 @@ static void nbs__cs_rekey_merge(const nbs__cs *c, const nbs__run *run, int64_t m
   /* 2: by the whole word, not by this detection's key bits: the old words' keys fit the last
    * detection's cells, which may have needed more bits (a layer more, say) than these */
   const nbs__digits dg = nbs__radix_digits(63);
-  nbs__radix(R, NULL, scratch, NULL, R, NULL, (int32_t)m, 0, dg, hist, 1, NULL, 0);
-  nbs__radix(S, NULL, scratch, NULL, S, NULL, (int32_t)m, 0, dg, hist, 1, NULL, 0);
+  nbs__radix(R, NULL, scratch, NULL, R, NULL, (int32_t)m, 0, dg, hist, 1, false, NULL, 0);
+  nbs__radix(S, NULL, scratch, NULL, S, NULL, (int32_t)m, 0, dg, hist, 1, false, NULL, 0);
   /* 3 */
   int32_t ib[NBS__THREADS_MAX + 1];
   int64_t rb[NBS__THREADS_MAX + 1], sb[NBS__THREADS_MAX + 1];
@@ -3465,11 +3595,11 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
   int32_t *ti = packed ? NULL : (int32_t *)(void *)(tk + NO);
   if (NO > 0) {
     nbs__radix(key, idx, tk, ti, tk, ti, NO, packed ? eb : 0, nbs__radix_digits(bits), hist,
-               1, NULL, 0);
+               1, false, NULL, 0);
   }
   if (NC > 0) {
     nbs__radix(A, NULL, key, NULL, key, NULL, NC, eb, nbs__radix_digits(cb), hist, threads,
-               A + NC, (size_t)(tk - (A + NC)));
+               run->ctx->cs_steal_first, A + NC, (size_t)(tk - (A + NC)));
   }
   /* d. the merge, from the end, a run at a time: outlier j goes after the core words whose
    * keys are below its own (a_j of them, found by galloping down from a_(j+1), then
@@ -3875,7 +4005,7 @@ static void nbs__cs_sort_gather(const nbs__cs *c, const nbs__run *run, const nbs
     /* 2. sort */
     /* the buckets' scratch: the y (and z) coordinates' arrays, not yet filled either */
     nbs__radix(k0, i0, k1, i1, c->key, c->idx, n, c->ks, dg, hist, threads,
-               (uint64_t *)(void *)c->ys, nn * (size_t)(dim - 1));
+               run->ctx->cs_steal_first, (uint64_t *)(void *)c->ys, nn * (size_t)(dim - 1));
   }
   /* 3. gather */
   nbs__cs_gather(c, run, NULL, threads);

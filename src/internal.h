@@ -153,7 +153,7 @@ struct nbs_context {
   size_t cs_part_min;
   bool cs_partitioned;
   /* cellsort's threaded sweep (nbs__cs_sweep_parts): the chunks the last detection's threads
-   * took from other threads' parts (read by the tests), and NBS_SWEEP_STEAL=first, which
+   * took from other threads' parts (read by the tests), and NBS_STEAL=first, which
    * makes every thread take one first (nbs__cellsort_steal_first). */
   int cs_stolen;
   bool cs_steal_first;

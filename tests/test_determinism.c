@@ -272,7 +272,7 @@ static void test_repeat_runs(void) {
  * large enough (60000 elements) for cellsort to use threads: a square (cube) and a strip
  * (rod), whose threads start and end inside its few long rows. The threads' sweep takes
  * chunks from another's part where one falls behind, which a run may or may not see; with
- * NBS_SWEEP_STEAL=first (steal = 1) every thread first takes the last chunk of the next
+ * NBS_STEAL=first (steal = 1) every thread first takes the last chunk of the next
  * one's part, whose pairs must still land in their place, and some must have been taken.
  * Without OpenMP the thread count is ignored and the comparison still holds. */
 static void test_thread_shape(const int *counts, size_t ncounts, int shape, long *stolen) {
@@ -322,14 +322,14 @@ static void test_thread_shape(const int *counts, size_t ncounts, int shape, long
 static void test_thread_counts(void) {
   const int counts[] = {1, 2, 3, 4, 7, 8};
   for (int steal = 0; steal < 2; steal++) {
-    if (steal) ASSERT_TRUE(setenv("NBS_SWEEP_STEAL", "first", 1) == 0);
+    if (steal) ASSERT_TRUE(setenv("NBS_STEAL", "first", 1) == 0);
     long stolen = 0;
     for (int shape = 0; shape < 4; shape++) {
       test_thread_shape(counts, sizeof counts / sizeof *counts, shape, &stolen);
     }
-    unsetenv("NBS_SWEEP_STEAL");
+    unsetenv("NBS_STEAL");
 #if defined(_OPENMP)
-    if (steal) CHECK_MSG(stolen > 0, "NBS_SWEEP_STEAL=first: no chunk taken from another part");
+    if (steal) CHECK_MSG(stolen > 0, "NBS_STEAL=first: no chunk taken from another part");
 #endif
   }
 }
@@ -738,12 +738,16 @@ static void test_time_steps(void) {
     nbs_context_destroy(gctx);
   }
   /* An input over 8 MiB (cellsort's NBS__CS_PREFETCH_MIN), where the gathers prefetch:
-   * the gather from scratch and that of nbs__cs_rekey, with one thread and two. */
-  for (int threads = 1; threads <= 2 && !test_failures; threads++) {
+   * the gather from scratch and that of nbs__cs_rekey, with one thread and two, and two
+   * with NBS_STEAL=first (each thread first gathers, sorts buckets of and sweeps the end
+   * of the other's part: ranges taken from another's part, in all three). */
+  for (int threads = 1; threads <= 3 && !test_failures; threads++) {
     nbs_context_def cdef = nbs_default_context_def();
-    cdef.threads = threads;
+    cdef.threads = threads == 3 ? 2 : threads;
+    if (threads == 3) ASSERT_TRUE(setenv("NBS_STEAL", "first", 1) == 0);
     nbs_context *lctx;
     ASSERT_OK(nbs_context_create(&cdef, &lctx));
+    unsetenv("NBS_STEAL");
     scene big = det_scene(DET_UNIFORM, 3, 380000, 70.0, 1.18, 45);
     uint64_t rng = 78;
     for (int k = 0; k < 5 && !test_failures; k++) {
