@@ -724,6 +724,7 @@ static void nbs__radix_bucket(uint64_t *sk, uint64_t *dk, uint64_t *out_k, const
 static void nbs__radix(uint64_t *sk, int32_t *si, uint64_t *dk, int32_t *di, uint64_t *out_k,
                        int32_t *out_i, int32_t n, int low, nbs__digits dg, uint32_t *hist,
                        int threads, bool first, uint64_t *scratch, size_t scratch_words) {
+  (void)first; /* read with OpenMP only */
   if (!si && nbs__radix_top_first(n, dg)) {
     uint32_t top[((size_t)1 << NBS__RADIX_BITS) + 1];
     nbs__digits lo, td; /* the digits below the top one, and the top one */
