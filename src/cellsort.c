@@ -453,10 +453,9 @@ static bool nbs__share_back_of(nbs__share *s, int t, uint32_t grain, uint32_t *a
   }
 }
 
-/* The last grain items left of the part with the most left, to *part: false once none is
- * left of any. */
-static bool nbs__share_back(nbs__share *s, uint32_t grain, int *part, uint32_t *a,
-                            uint32_t *b) {
+/* The last grain items left of the part with the most left: false once none is left of
+ * any. */
+static bool nbs__share_back(nbs__share *s, uint32_t grain, uint32_t *a, uint32_t *b) {
   for (;;) {
     int v = -1;
     uint32_t most = 0;
@@ -469,11 +468,30 @@ static bool nbs__share_back(nbs__share *s, uint32_t grain, int *part, uint32_t *
       }
     }
     if (v < 0) return false;
-    if (nbs__share_back_of(s, v, grain, a, b)) {
-      *part = v;
+    if (nbs__share_back_of(s, v, grain, a, b)) return true;
+  }
+}
+
+/* The next range [*a, *b) for a thread on part t (its own, NBS__PARTS; *stage starts at 0):
+ * with `first` (the tests'), the last range of the next part first; then part t from its
+ * front (grain items, or half of what is left with `half`); then the last grain items of
+ * the part with the most left. *taken says whether the range is another part's. False once
+ * none is left of any part. */
+static bool nbs__share_next(nbs__share *s, int t, int *stage, uint32_t grain, bool half,
+                            uint32_t *a, uint32_t *b, bool *taken) {
+  *taken = true;
+  if (*stage == 0) {
+    *stage = 1;
+    if (s->first && nbs__share_back_of(s, (t + 1) % s->parts, grain, a, b)) return true;
+  }
+  if (*stage == 1) {
+    if (nbs__share_front(s, t, grain, half, a, b)) {
+      *taken = false;
       return true;
     }
+    *stage = 2;
   }
+  return nbs__share_back(s, grain, a, b);
 }
 #endif
 
@@ -668,6 +686,17 @@ static void nbs__radix_local(uint64_t *a, uint64_t *out, uint64_t *other, int32_
   if (cur != out) memcpy(out, cur, (size_t)len * sizeof *cur);
 }
 
+/* Bucket b of the top digit's pass (top[b] .. top[b + 1] of dk) sorted by the digits lo
+ * below it into out_k, with the histogram h, through `mine` (a thread's scratch of the
+ * largest bucket) or else the other array's place of the bucket. */
+static void nbs__radix_bucket(uint64_t *sk, uint64_t *dk, uint64_t *out_k, const uint32_t *top,
+                              size_t b, int low, nbs__digits lo, uint32_t *h, uint64_t *mine) {
+  if (top[b + 1] == top[b]) return;
+  const uint32_t s0 = top[b];
+  uint64_t *other = mine ? mine : dk == out_k ? sk + s0 : dk + s0;
+  nbs__radix_local(dk + s0, out_k + s0, other, (int32_t)(top[b + 1] - s0), low, lo, h);
+}
+
 /* Radix sort of (key, idx) on the digits dg of key from bit `low` on. The keys start in
  * (sk, si) and the sort moves them between it and (dk, di), both of n entries; the result
  * is left in (out_k, out_i), one of the two (copied there if the passes end in the other).
@@ -710,17 +739,6 @@ static void nbs__radix_local(uint64_t *a, uint64_t *out, uint64_t *other, int32_
  * instead of 256 of 3,900; 2D 25 bits: 512 instead of 128 buckets, whose 7,800 keys do not
  * fit L1): no faster (interleaved, min of 6, 33.2 / 33.3 and 19.6 / 19.5). On Zen 5 the
  * top digit is the widest where the input is not in cell order (nbs__radix_top). */
-/* Bucket b of the top digit's pass (top[b] .. top[b + 1] of dk) sorted by the digits lo
- * below it into out_k, with the histogram h, through `mine` (a thread's scratch of the
- * largest bucket) or else the other array's place of the bucket. */
-static void nbs__radix_bucket(uint64_t *sk, uint64_t *dk, uint64_t *out_k, const uint32_t *top,
-                              size_t b, int low, nbs__digits lo, uint32_t *h, uint64_t *mine) {
-  if (top[b + 1] == top[b]) return;
-  const uint32_t s0 = top[b];
-  uint64_t *other = mine ? mine : dk == out_k ? sk + s0 : dk + s0;
-  nbs__radix_local(dk + s0, out_k + s0, other, (int32_t)(top[b + 1] - s0), low, lo, h);
-}
-
 static void nbs__radix(uint64_t *sk, int32_t *si, uint64_t *dk, int32_t *di, uint64_t *out_k,
                        int32_t *out_i, int32_t n, int low, nbs__digits dg, uint32_t *hist,
                        int threads, bool first, uint64_t *scratch, size_t scratch_words) {
@@ -739,34 +757,28 @@ static void nbs__radix(uint64_t *sk, int32_t *si, uint64_t *dk, int32_t *di, uin
        * back (nbs__share); its histogram and scratch are its own in the team */
 #if defined(_OPENMP)
       if (threads > 1) {
-      uint32_t cut[NBS__THREADS_MAX + 1];
-      for (int t = 0, b = 0; t <= threads; t++) {
-        const uint32_t from = t == threads ? (uint32_t)n : (uint32_t)nbs__chunk(n, t, threads);
-        while ((size_t)b < td.buckets && top[b] < from) b++;
-        cut[t] = (uint32_t)b;
-      }
-      nbs__share sh;
-      nbs__share_init(&sh, threads, cut, first);
+        uint32_t cut[NBS__THREADS_MAX + 1];
+        for (int t = 0, b = 0; t <= threads; t++) {
+          const uint32_t from = t == threads ? (uint32_t)n : (uint32_t)nbs__chunk(n, t, threads);
+          while ((size_t)b < td.buckets && top[b] < from) b++;
+          cut[t] = (uint32_t)b;
+        }
+        nbs__share sh;
+        nbs__share_init(&sh, threads, cut, first);
 #pragma omp parallel num_threads(threads)
-      {
-        const int me = nbs__thread_num();
-        uint32_t *h = hist + (size_t)me * lo.buckets;
-        uint64_t *mine = scratch ? scratch + (size_t)me * most : NULL;
-        uint32_t a, b;
-        int v;
-        NBS__PARTS(t, threads) {
-          if (sh.first && nbs__share_back_of(&sh, (t + 1) % threads, 1, &a, &b)) {
-            nbs__radix_bucket(sk, dk, out_k, top, a, low, lo, h, mine);
-          }
-          while (nbs__share_front(&sh, t, 1, false, &a, &b)) {
-            nbs__radix_bucket(sk, dk, out_k, top, a, low, lo, h, mine);
+        {
+          const int me = nbs__thread_num();
+          uint32_t *h = hist + (size_t)me * lo.buckets;
+          uint64_t *mine = scratch ? scratch + (size_t)me * most : NULL;
+          uint32_t a, b;
+          bool taken;
+          NBS__PARTS(t, threads) {
+            for (int stage = 0; nbs__share_next(&sh, t, &stage, 1, false, &a, &b, &taken);) {
+              nbs__radix_bucket(sk, dk, out_k, top, a, low, lo, h, mine);
+            }
           }
         }
-        while (nbs__share_back(&sh, 1, &v, &a, &b)) {
-          nbs__radix_bucket(sk, dk, out_k, top, a, low, lo, h, mine);
-        }
-      }
-      return;
+        return;
       }
 #endif
       for (size_t b = 0; b < td.buckets; b++) {
@@ -1373,6 +1385,13 @@ int nbs__cellsort_simd(void) {
  * library reports (glibc's sysconf gave 320 MiB of L3 on the benchmark machine, which has
  * 32). The environment variable NBS_PARTITION, read when a context is created, says
  * "always" or "never" instead, for tests and comparisons. */
+size_t nbs__cellsort_partition_min(void) {
+  const char *e = getenv("NBS_PARTITION");
+  if (e && strcmp(e, "always") == 0) return 0;
+  if (e && strcmp(e, "never") == 0) return SIZE_MAX;
+  return (size_t)1 << 30;
+}
+
 /* NBS_STEAL=first in the environment, read when a context is created: in the work the
  * threads share (nbs__share: the sweep's chunks, the gather, the sort's buckets) each thread
  * first takes the last range of the next thread's part, then does its own, so that the
@@ -1381,13 +1400,6 @@ int nbs__cellsort_simd(void) {
 bool nbs__cellsort_steal_first(void) {
   const char *e = getenv("NBS_STEAL");
   return e && strcmp(e, "first") == 0;
-}
-
-size_t nbs__cellsort_partition_min(void) {
-  const char *e = getenv("NBS_PARTITION");
-  if (e && strcmp(e, "always") == 0) return 0;
-  if (e && strcmp(e, "never") == 0) return SIZE_MAX;
-  return (size_t)1 << 30;
 }
 
 /* Offers the block [c0, c0 + lanes) against its ranges into the sink: in one call of the
@@ -2265,20 +2277,13 @@ static int nbs__cs_sweep_parts(const nbs__cs *c, nbs__sink *sinks, int threads,
     const int me = nbs__thread_num();
     const int32_t mine = me == 0 ? threads : me; /* the list of the chunks it takes */
     uint32_t a, b;
+    bool taken;
     NBS__PARTS(t, threads) {
-      /* the tests': the next part's last chunk first */
-      if (sh.first && nbs__share_back_of(&sh, (t + 1) % threads, 1, &a, &b)) {
-        failed = !nbs__cs_sweep_chunk(c, sinks, mine, bound, (int)a, 1, segs);
-        stolen++;
+      for (int stage = 0; !failed && nbs__share_next(&sh, t, &stage, 1, true, &a, &b, &taken);) {
+        failed = !nbs__cs_sweep_chunk(c, sinks, taken ? mine : t, bound, (int)a, (int)(b - a),
+                                      segs);
+        stolen += taken;
       }
-      while (!failed && nbs__share_front(&sh, t, 1, true, &a, &b)) {
-        failed = !nbs__cs_sweep_chunk(c, sinks, t, bound, (int)a, (int)(b - a), segs);
-      }
-    }
-    int v;
-    while (!failed && nbs__share_back(&sh, 1, &v, &a, &b)) { /* its own parts are done */
-      failed = !nbs__cs_sweep_chunk(c, sinks, mine, bound, (int)a, 1, segs);
-      stolen++;
     }
   }
   ctx->cs_stolen = stolen;
@@ -3115,29 +3120,23 @@ static void nbs__cs_gather(const nbs__cs *c, const nbs__run *run, const uint64_t
     return;
   }
 #if defined(_OPENMP)
-  if (threads > 1) {
-  /* halves, the rest taken from the back by the thread done first (nbs__share) */
-  uint32_t cut[NBS__THREADS_MAX + 1];
-  for (int t = 0; t <= threads; t++) cut[t] = (uint32_t)nbs__chunk(n, t, threads);
-  nbs__share sh;
-  nbs__share_init(&sh, threads, cut, run->ctx->cs_steal_first);
+  if (threads > 1) { /* halves, the rest taken from the back by the thread done first */
+    uint32_t cut[NBS__THREADS_MAX + 1];
+    for (int t = 0; t <= threads; t++) cut[t] = (uint32_t)nbs__chunk(n, t, threads);
+    nbs__share sh;
+    nbs__share_init(&sh, threads, cut, run->ctx->cs_steal_first);
 #pragma omp parallel num_threads(threads)
-  {
-    uint32_t a, b;
-    int v;
-    NBS__PARTS(t, threads) {
-      if (sh.first && nbs__share_back_of(&sh, (t + 1) % threads, NBS__CS_GATHER_GRAIN, &a, &b)) {
-        nbs__cs_gather_range(c, run, ends, (int32_t)a, (int32_t)b);
-      }
-      while (nbs__share_front(&sh, t, NBS__CS_GATHER_GRAIN, true, &a, &b)) {
-        nbs__cs_gather_range(c, run, ends, (int32_t)a, (int32_t)b);
+    {
+      uint32_t a, b;
+      bool taken;
+      NBS__PARTS(t, threads) {
+        for (int stage = 0;
+             nbs__share_next(&sh, t, &stage, NBS__CS_GATHER_GRAIN, true, &a, &b, &taken);) {
+          nbs__cs_gather_range(c, run, ends, (int32_t)a, (int32_t)b);
+        }
       }
     }
-    while (nbs__share_back(&sh, NBS__CS_GATHER_GRAIN, &v, &a, &b)) {
-      nbs__cs_gather_range(c, run, ends, (int32_t)a, (int32_t)b);
-    }
-  }
-  return;
+    return;
   }
 #endif
   nbs__cs_gather_range(c, run, ends, 0, n);
