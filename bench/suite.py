@@ -38,7 +38,8 @@ PEERS = ["nanoflann", "cgal", "scipy", "lammps", "lammps-nosort"]
 ALL_TOOLS = ["nbs"] + PEERS
 COLUMNS = ["scene", "dim", "order", "N", "fraction", "spacing", "tool", "status", "seconds",
            "ns_per_element", "peak_bytes", "rss_extra_bytes", "work_bytes", "pair_bytes",
-           "pairs", "agree", "ran", "repeats", "threads", "hash", "nbs_build", "note"]
+           "pairs", "agree", "ran", "repeats", "threads", "hash", "nbs_build", "core_ratio",
+           "note"]
 KEY = ("scene", "dim", "order", "N", "spacing", "tool")
 
 
@@ -151,10 +152,14 @@ class Suite:
 
         def one_round():
             for t in counts if talgs else []:
+                # the cores' balance just before a process with threads (probe_cores)
+                ratio = self.probe_cores() if t > 1 else None
                 res, err = self.run_cmd([f"{self.bin}/nbs_bench", "--file", path, "--dim",
                                          str(dim), "--threads", str(t), "--algorithms",
                                          ",".join(talgs)] + timing, f"nbs-threads{t}",
                                         a.timeout)
+                for r in res if ratio else []:
+                    r["core_ratio"] = f"{ratio:.2f}"
                 keep(res, "-1t" if t == 1 else "")
             steps = [x for x in timing if x != "--fresh"] + ["--move", repr(a.steps)]
             for t in counts if salgs else []:
@@ -271,6 +276,38 @@ class Suite:
                 os.remove(path + ".data")
         self.record(tag, dict(scene=scene, dim=dim, order=order, N=n, fraction=fraction,
                               spacing=spacing), results)
+
+    def probe_cores(self):
+        """How far apart the first two cores this process may use run at this moment: the
+        same small detection (nbs_bench, cellsort, one thread, N = PROBE_N) pinned to each
+        in turn (sched_setaffinity), the slower one's time over the faster one's. This
+        machine's virtual cores have run the same work up to 1.5x apart for spells of
+        minutes, with no load of ours (bench/README.md); two threads can then give at most
+        1 + 1/ratio times one thread's speed on the faster core, however the work is shared.
+        Each threaded process's rows keep the ratio measured just before it (column
+        core_ratio), and the summary's threads target shows it. None where the process may
+        not run on two cores or a probe fails."""
+        if not hasattr(os, "sched_getaffinity"):
+            return None
+        cpus = sorted(os.sched_getaffinity(0))[:2]
+        if len(cpus) < 2:
+            return None
+        ns = []
+        for cpu in cpus:
+            cmd = [f"{self.bin}/nbs_bench", "--scene", "uniform", "--n", str(PROBE_N),
+                   "--algorithms", "cellsort", "--repeats", "10", "--fresh"]
+            try:
+                p = subprocess.run(cmd, capture_output=True, text=True, timeout=120,
+                                   preexec_fn=lambda c=cpu: os.sched_setaffinity(0, {c}))
+            except (OSError, subprocess.SubprocessError):
+                return None
+            r = next((x for x in map(parse_line, p.stdout.splitlines()) if x), None)
+            if not r or r.get("status") != "ok":
+                return None
+            ns.append(float(r["ns_per_element"]))
+        if self.a.verbose:
+            log(f"    cores: {ns[0]:.2f} and {ns[1]:.2f} ns per element (cpus {cpus})")
+        return max(ns) / min(ns)
 
     def skip_peer(self, peer, scene, dim, n, path):
         a = self.a
@@ -671,7 +708,8 @@ def summary(rows, n_head):
             same = one.get("hash") and one["hash"] == two.get("hash")
             target(f"threads: auto with 2 threads >= 1.7x one thread, same output ({dim}D)",
                    sp >= 1.7 and bool(same), f"speed-up x{sp:.2f}, output "
-                   f"{'identical' if same else 'DIFFERENT'} (ran {two['ran']})")
+                   f"{'identical' if same else 'DIFFERENT'} (ran {two['ran']})"
+                   + cores_text(two.get("core_ratio")))
         else:
             target(f"threads: auto with 2 threads >= 1.7x one thread ({dim}D)", None, "")
     out.append("### Targets (3D unless said, uniform fraction 0.5, random order, N = "
@@ -682,6 +720,25 @@ def summary(rows, n_head):
     out += floors(rows)
     out += consistency(rows)
     return "\n".join(out) + "\n"
+
+
+def cores_text(ratio):
+    """What the summary says of a threaded row's core_ratio (Suite.probe_cores).
+
+    >>> cores_text("1.45")
+    '; the cores ran x1.45 apart just before it (pinned probes): two threads could give about 1.69x at most'
+    >>> cores_text("1.02")
+    '; the cores ran x1.02 apart just before it (pinned probes)'
+    >>> cores_text("") + cores_text(None)
+    ''
+    """
+    if not ratio:
+        return ""
+    r = float(ratio)
+    text = f"; the cores ran x{r:.2f} apart just before it (pinned probes)"
+    if r >= 1.05:
+        text += f": two threads could give about {1 + 1 / r:.2f}x at most"
+    return text
 
 
 def floors(rows):
@@ -708,6 +765,7 @@ def floors(rows):
 
 # Differences beyond this between two rows of one configuration mark a disturbed run.
 DISTURBED = 1.15
+PROBE_N = 200000  # elements of the cores' probe (Suite.probe_cores)
 
 
 def consistency(rows):
