@@ -4618,8 +4618,8 @@ nbs_status nbs__cellsort(nbs__run *run) {
   size_t more = 0;
   for (int k = 0; k < nsegs; k++) more += segs[k].count;
   if (st == NBS_OK && more > 0) {
-    bool room; /* always: threads > 1 only without callbacks and max_pairs */
-    st = nbs__room(run, more, &room);
+    /* threads > 1 only without callbacks and max_pairs: room is always made */
+    st = nbs__room_whole(run, more);
     if (st == NBS_OK) {
       nbs__cs_append(run->buf + run->count, sinks, segs, nsegs, threads, more);
       run->count += more;

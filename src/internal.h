@@ -338,6 +338,12 @@ nbs_status nbs__flush(nbs__run *run);
  * batch smaller than need, or max_pairs in reach): then emit pair by pair. */
 nbs_status nbs__room(nbs__run *run, size_t need, bool *room);
 
+/* Makes room for `need` more pairs where the run's count and need are the detection's whole
+ * list (cellsort's threads, appending theirs at the end; no callback, no max_pairs): the
+ * buffer grows to that and a sixteenth more, not by half again (context.c,
+ * nbs__pairs_grow). */
+nbs_status nbs__room_whole(nbs__run *run, size_t need);
+
 /* The pair of elements a and b as reported: (i, j) with i < j. */
 static inline nbs_pair nbs__pair_of(int32_t a, int32_t b) {
   nbs_pair p;

@@ -265,6 +265,38 @@ static void test_reserve(void) {
   scene_free(&s);
 }
 
+/* A detection's whole list, known before it is written (cellsort's threads append theirs at
+ * the end), grows the pair buffer to it and a sixteenth more, not by half again: time steps
+ * whose count moves by less than a sixteenth then fit the buffer without allocating, and it
+ * stays within 1/16 of the pairs (the half again had left it at 1.5 times after the first
+ * step that found a few more). */
+static void test_whole_list_room(void) {
+  test_alloc ta = {0, 0, 0, -1, 0, 0};
+  nbs_context_def cdef = nbs_default_context_def();
+  cdef.allocator = test_allocator(&ta);
+  nbs_context *ctx;
+  ASSERT_OK(nbs_context_create(&cdef, &ctx));
+  nbs__run run;
+  memset(&run, 0, sizeof run);
+  run.ctx = ctx;
+  ASSERT_OK(nbs__room_whole(&run, 160000));
+  CHECK_EQ(run.cap, (size_t)170000);
+  CHECK_TRUE(run.buf == ctx->pairs && run.cap == ctx->pairs_cap);
+  for (size_t k = 0; k < 160000; k++) run.buf[k] = (nbs_pair){(int32_t)k, (int32_t)k + 1};
+  run.count = 160000;
+  long calls = ta.calls;
+  ASSERT_OK(nbs__room_whole(&run, 9000)); /* 169,000: fits */
+  CHECK_EQ(ta.calls, calls);
+  ASSERT_OK(nbs__room_whole(&run, 16000)); /* 176,000 and a sixteenth */
+  CHECK_EQ(run.cap, (size_t)187000);
+  CHECK_EQ(nbs_context_bytes(ctx), ta.live_bytes);
+  bool kept = true; /* what the list held before the growth is still there */
+  for (size_t k = 0; k < 160000; k++) kept = kept && run.buf[k].i == (int32_t)k;
+  CHECK_TRUE(kept);
+  nbs_context_destroy(ctx);
+  CHECK_EQ(ta.live, 0);
+}
+
 int main(int argc, char **argv) {
   static const test_case tests[] = {
       {"nbs_formula", test_nbs_formula},
@@ -273,6 +305,7 @@ int main(int argc, char **argv) {
       {"screening_cells", test_screening_cells},
       {"no_allocation_after_first", test_no_allocation_after_first},
       {"reserve", test_reserve},
+      {"whole_list_room", test_whole_list_room},
   };
   return test_main(argc, argv, tests, sizeof tests / sizeof *tests);
 }
