@@ -282,8 +282,10 @@ class Suite:
         same small detection (nbs_bench, cellsort, one thread, N = PROBE_N) pinned to each
         in turn (sched_setaffinity), the slower one's time over the faster one's. This
         machine's virtual cores have run the same work up to 1.5x apart for spells of
-        minutes, with no load of ours (bench/README.md); two threads can then give at most
-        1 + 1/ratio times one thread's speed on the faster core, however the work is shared.
+        minutes, with no load of ours (bench/README.md); two threads can then give about
+        1 + 1/ratio times one thread's speed on the faster core, however the work is shared
+        (about: the probe is a few percent noisy, and the one-thread row may have run on
+        the slower core).
         Each threaded process's rows keep the ratio measured just before it (column
         core_ratio), and the summary's threads target shows it. None where the process may
         not run on two cores or a probe fails."""
@@ -726,7 +728,7 @@ def cores_text(ratio):
     """What the summary says of a threaded row's core_ratio (Suite.probe_cores).
 
     >>> cores_text("1.45")
-    '; the cores ran x1.45 apart just before it (pinned probes): two threads could give about 1.69x at most'
+    '; the cores ran x1.45 apart just before it (pinned probes): two threads could give about 1.69x one thread on the faster core'
     >>> cores_text("1.02")
     '; the cores ran x1.02 apart just before it (pinned probes)'
     >>> cores_text("") + cores_text(None)
@@ -737,7 +739,7 @@ def cores_text(ratio):
     r = float(ratio)
     text = f"; the cores ran x{r:.2f} apart just before it (pinned probes)"
     if r >= 1.05:
-        text += f": two threads could give about {1 + 1 / r:.2f}x at most"
+        text += f": two threads could give about {1 + 1 / r:.2f}x one thread on the faster core"
     return text
 
 
