@@ -281,7 +281,7 @@ class Suite:
         """How far apart the first two cores this process may use run at this moment: the
         same small detection (nbs_bench, cellsort, one thread, N = PROBE_N) pinned to each
         in turn (sched_setaffinity), the slower one's time over the faster one's. This
-        machine's virtual cores have run the same work up to 1.5x apart for spells of
+        machine's virtual cores have run the same work up to 2x apart for spells of
         minutes, with no load of ours (bench/README.md); two threads can then give about
         1 + 1/ratio times one thread's speed on the faster core, however the work is shared
         (about: the probe is a few percent noisy, and the one-thread row may have run on

@@ -337,6 +337,17 @@ nbs_status nbs_context_reserve(nbs_context *ctx, int64_t n, size_t pairs) {
 
 /* ---- the pair sink ------------------------------------------------------------------- */
 
+/* Grows the pair buffer under run to hold `more` pairs beyond its count (nbs__pairs_grow,
+ * within max_pairs), and points the run at it. */
+static nbs_status nbs__run_grow(nbs__run *run, size_t more, bool whole) {
+  nbs_context *ctx = run->ctx;
+  ctx->pairs_count = run->count;
+  NBS__TRY(nbs__pairs_grow(ctx, run->count + more, ctx->max_pairs, whole));
+  run->buf = ctx->pairs;
+  run->cap = ctx->pairs_cap;
+  return NBS_OK;
+}
+
 nbs_status nbs__flush(nbs__run *run) {
   nbs_context *ctx = run->ctx;
   if (run->callback) {
@@ -352,21 +363,12 @@ nbs_status nbs__flush(nbs__run *run) {
                      "more than %zu pairs (the context's max_pairs); use a callback or raise it",
                      ctx->max_pairs);
   }
-  ctx->pairs_count = run->count;
-  NBS__TRY(nbs__pairs_grow(ctx, run->count + 1, ctx->max_pairs, false));
-  run->buf = ctx->pairs;
-  run->cap = ctx->pairs_cap;
-  return NBS_OK;
+  return nbs__run_grow(run, 1, false);
 }
 
 nbs_status nbs__room_whole(nbs__run *run, size_t need) {
   if (run->cap - run->count >= need) return NBS_OK;
-  nbs_context *ctx = run->ctx;
-  ctx->pairs_count = run->count;
-  NBS__TRY(nbs__pairs_grow(ctx, run->count + need, 0, true));
-  run->buf = ctx->pairs;
-  run->cap = ctx->pairs_cap;
-  return NBS_OK;
+  return nbs__run_grow(run, need, true);
 }
 
 nbs_status nbs__room(nbs__run *run, size_t need, bool *room) {
@@ -382,11 +384,7 @@ nbs_status nbs__room(nbs__run *run, size_t need, bool *room) {
     *room = false; /* the pair-by-pair path will stop at the limit with NBS_ERR_PAIRS */
     return NBS_OK;
   }
-  ctx->pairs_count = run->count;
-  NBS__TRY(nbs__pairs_grow(ctx, run->count + need, ctx->max_pairs, false));
-  run->buf = ctx->pairs;
-  run->cap = ctx->pairs_cap;
-  return NBS_OK;
+  return nbs__run_grow(run, need, false);
 }
 
 /* ---- detection ----------------------------------------------------------------------- */
