@@ -226,9 +226,8 @@ nbs_status nbs__work_reserve(nbs_context *ctx, size_t bytes) {
  * from each other). One thread grows its list pair by pair as before. */
 static nbs_status nbs__pairs_grow(nbs_context *ctx, size_t need, size_t limit, bool whole) {
   if (need <= ctx->pairs_cap) return NBS_OK;
-  size_t cap = ctx->pairs_cap + ctx->pairs_cap / 2;
-  if (whole) cap = need + need / 16; /* wrapped around: need, below */
-  if (cap < need) cap = need;
+  size_t cap = whole ? need + need / 16 : ctx->pairs_cap + ctx->pairs_cap / 2;
+  if (cap < need) cap = need; /* either sum wrapped around */
   if (cap < 1024) cap = 1024;
   if (limit && cap > limit) cap = limit;
   if (cap > SIZE_MAX / sizeof(nbs_pair)) {
@@ -337,10 +336,15 @@ nbs_status nbs_context_reserve(nbs_context *ctx, int64_t n, size_t pairs) {
 
 /* ---- the pair sink ------------------------------------------------------------------- */
 
-/* Grows the pair buffer under run to hold `more` pairs beyond its count (nbs__pairs_grow,
- * within max_pairs), and points the run at it. */
+/* Grows the pair buffer under run to hold `more` pairs beyond its count (nbs__pairs_grow),
+ * and points the run at it; NBS_ERR_PAIRS where they would pass the context's max_pairs. */
 static nbs_status nbs__run_grow(nbs__run *run, size_t more, bool whole) {
   nbs_context *ctx = run->ctx;
+  if (ctx->max_pairs && run->count + more > ctx->max_pairs) {
+    return nbs__fail(ctx, NBS_ERR_PAIRS, -1,
+                     "more than %zu pairs (the context's max_pairs); use a callback or raise it",
+                     ctx->max_pairs);
+  }
   ctx->pairs_count = run->count;
   NBS__TRY(nbs__pairs_grow(ctx, run->count + more, ctx->max_pairs, whole));
   run->buf = ctx->pairs;
@@ -357,11 +361,6 @@ nbs_status nbs__flush(nbs__run *run) {
     }
     run->count = 0;
     return NBS_OK;
-  }
-  if (ctx->max_pairs && run->count >= ctx->max_pairs) {
-    return nbs__fail(ctx, NBS_ERR_PAIRS, -1,
-                     "more than %zu pairs (the context's max_pairs); use a callback or raise it",
-                     ctx->max_pairs);
   }
   return nbs__run_grow(run, 1, false);
 }

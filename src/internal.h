@@ -339,9 +339,9 @@ nbs_status nbs__flush(nbs__run *run);
 nbs_status nbs__room(nbs__run *run, size_t need, bool *room);
 
 /* Makes room for `need` more pairs where the run's count and need are the detection's whole
- * list (cellsort's threads, appending theirs at the end; no callback, no max_pairs): the
- * buffer grows to that and a sixteenth more, not by half again (context.c,
- * nbs__pairs_grow). */
+ * list (cellsort's threads, appending theirs at the end; no callback): the buffer grows to
+ * that and a sixteenth more, not by half again (context.c, nbs__pairs_grow). NBS_ERR_PAIRS
+ * where the list would pass the context's max_pairs (cellsort runs one thread then). */
 nbs_status nbs__room_whole(nbs__run *run, size_t need);
 
 /* The pair of elements a and b as reported: (i, j) with i < j. */

@@ -295,6 +295,19 @@ static void test_whole_list_room(void) {
   CHECK_TRUE(kept);
   nbs_context_destroy(ctx);
   CHECK_EQ(ta.live, 0);
+
+  /* within max_pairs, or NBS_ERR_PAIRS: never a buffer smaller than the list */
+  cdef.max_pairs = 100000;
+  ASSERT_OK(nbs_context_create(&cdef, &ctx));
+  memset(&run, 0, sizeof run);
+  run.ctx = ctx;
+  ASSERT_OK(nbs__room_whole(&run, 90000));
+  CHECK_TRUE(run.cap >= 90000 && run.cap <= 100000);
+  run.count = 90000;
+  CHECK_EQ(nbs__room_whole(&run, 20000), NBS_ERR_PAIRS);
+  CHECK_TRUE(run.cap >= 90000 && run.cap <= 100000);
+  nbs_context_destroy(ctx);
+  CHECK_EQ(ta.live, 0);
 }
 
 int main(int argc, char **argv) {
