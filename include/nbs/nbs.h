@@ -225,7 +225,10 @@ NBS_API nbs_detect_def nbs_default_detect_def(void);
  * Without a callback the pairs replace the context's buffer (nbs_pairs); with one they are
  * delivered in batches and the buffer is left empty. After a first detection, a detection
  * with the same or a smaller n (and a domain of no more cells per axis) allocates nothing,
- * unless it finds more pairs than the buffer has held before.
+ * unless it finds more pairs than the buffer has held before, or, with NBS, its two fullest
+ * neighbouring layers (2D: rows) hold more elements than its layer block has room for: the
+ * first detection's two fullest and four standard deviations of that count more, which a
+ * simulation's steps stay within unless its elements crowd into fewer layers.
  * Errors: NBS_ERR_NULL, NBS_ERR_DIM, NBS_ERR_COUNT, NBS_ERR_COORD, NBS_ERR_RADIUS,
  * NBS_ERR_ALGORITHM, NBS_ERR_MODE, NBS_ERR_BUDGET, NBS_ERR_EXTENT, NBS_ERR_NOMEM,
  * NBS_ERR_PAIRS, NBS_ERR_STOPPED, NBS_ERR_BUSY (called from this detection's own callback).
