@@ -327,11 +327,24 @@ nbs_status nbs_context_reserve(nbs_context *ctx, int64_t n, size_t pairs) {
   /* The largest per-element layout of the algorithms: cellsort's in 3D with radii (44 bytes
    * per element, for as many threads as a detection may use), above sorting's 4 int32 and
    * NBS's 3 int32 plus the per-axis heads. */
+  const int threads = nbs__threads(ctx, NBS__THREADS_MAX);
   if (n > 0) {
-    NBS__TRY(nbs__work_reserve(ctx, nbs__cellsort_bytes(3, (int32_t)n, true,
-                                                        nbs__threads(ctx, NBS__THREADS_MAX))));
+    NBS__TRY(nbs__work_reserve(ctx, nbs__cellsort_bytes(3, (int32_t)n, true, threads)));
   }
-  return nbs__pairs_grow(ctx, pairs, 0, false);
+  NBS__TRY(nbs__pairs_grow(ctx, pairs, 0, false));
+  /* With threads, cellsort's threads stage their pairs in lists of their own (thread 0's
+   * the chunks it takes from others' parts), appended to the buffer after the sweep. How
+   * the chunks fall to the threads changes from detection to detection with the cores'
+   * speeds, and a thread may take all but the first: each list is made to hold them all. */
+  for (int t = 0; threads > 1 && pairs > 0 && t < threads; t++) {
+    nbs_pair *buf;
+    size_t cap;
+    if (nbs__thread_pairs_grow(ctx, t, pairs, &buf, &cap) != NBS_OK) {
+      return nbs__fail(ctx, NBS_ERR_NOMEM, -1,
+                       "cannot allocate thread %d's pair list of %zu pairs", t, pairs);
+    }
+  }
+  return NBS_OK;
 }
 
 /* ---- the pair sink ------------------------------------------------------------------- */

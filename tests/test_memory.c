@@ -2,6 +2,9 @@
  * Memory: the byte counts of the book's formulas, the library's accounting against the
  * allocator's, and no allocation in detections after the first (a simulation's time steps).
  */
+/* setenv, unsetenv */
+#define _POSIX_C_SOURCE 200809L
+
 #include "internal.h"
 #include "test.h"
 #include "util.h"
@@ -237,25 +240,61 @@ static void test_no_allocation_after_first(void) {
   }
 }
 
-/* A simulation's time steps with NBS: the elements of a uniform scene random-walk by up
- * to 0.02 diameters per axis and step, kept within the first step's bounding box (the same
- * cells per axis), and a detection every step allocates nothing: the two fullest
- * neighbouring layers (2D rows) hold a few standard deviations more or less from step to
- * step, which the layer block's first slack takes (nbs__nbs_block_cap). With the block
- * allocated exactly, it grew at step 1-40 of such walks (N = 5000 to 1e6). The pair buffer
- * is given room beforehand (nbs_context_reserve): its growth is the header's other case. */
+/* A simulation's time step for the scene s: every coordinate moves by up to 0.02
+ * diameters, reflected into the box [lo, hi] (the first step's bounding box, so that the
+ * cells per axis stay as they were). *rng is the state of the steps' random numbers. */
+static void walk_step(scene *s, const double lo[3], const double hi[3], uint64_t *rng) {
+  const int dim = s->dim;
+  for (int64_t k = 0; k < s->n * dim; k++) {
+    *rng = *rng * 6364136223846793005ull + 1442695040888963407ull;
+    const double u = (double)(*rng >> 11) * 0x1p-53;
+    const int a = (int)(k % dim);
+    double v = s->coords[k] + 0.02 * s->diameter * (2.0 * u - 1.0);
+    if (v < lo[a]) v = 2.0 * lo[a] - v;
+    if (v > hi[a]) v = 2.0 * hi[a] - v;
+    s->coords[k] = v;
+  }
+}
+
+/* The bounding box of the scene s. */
+static void scene_box(const scene *s, double lo[3], double hi[3]) {
+  for (int a = 0; a < s->dim; a++) {
+    lo[a] = hi[a] = s->coords[a];
+    for (int64_t k = 0; k < s->n; k++) {
+      const double v = s->coords[k * s->dim + a];
+      lo[a] = v < lo[a] ? v : lo[a];
+      hi[a] = v > hi[a] ? v : hi[a];
+    }
+  }
+}
+
+/* Detects `steps` time steps of s (walk_step) with the context ctx on the counting
+ * allocator *ta and the detection def, stopping at the first that allocates; returns that
+ * step, or 0 if none did. */
+static int steps_allocating(nbs_context *ctx, const test_alloc *ta, scene *s,
+                            const nbs_detect_def *def, int steps) {
+  double lo[3], hi[3];
+  scene_box(s, lo, hi);
+  uint64_t rng = 0x9e3779b97f4a7c15ull;
+  const nbs_input in = scene_input(s);
+  const long calls = ta->calls;
+  for (int step = 1; step <= steps; step++) {
+    walk_step(s, lo, hi, &rng);
+    if (nbs_detect(ctx, &in, def) != NBS_OK) return -step;
+    if (ta->calls != calls) return step;
+  }
+  return 0;
+}
+
+/* A simulation's time steps with NBS: the elements of a uniform scene random-walk, and a
+ * detection every step allocates nothing: the two fullest neighbouring layers (2D rows)
+ * hold a few standard deviations more or less from step to step, which the layer block's
+ * first slack takes (nbs__nbs_block_cap). With the block allocated exactly, it grew at
+ * step 1-40 of such walks (N = 5000 to 1e6). The pair buffer is given room beforehand
+ * (nbs_context_reserve): its growth is the header's other case. */
 static void test_nbs_block_steps(void) {
   for (int dim = 2; dim <= 3; dim++) {
     scene s = test_scene(SCENE_UNIFORM, dim, 20000, 0.5);
-    double lo[3], hi[3];
-    for (int a = 0; a < dim; a++) {
-      lo[a] = hi[a] = s.coords[a];
-      for (int64_t k = 0; k < s.n; k++) {
-        const double v = s.coords[k * dim + a];
-        lo[a] = v < lo[a] ? v : lo[a];
-        hi[a] = v > hi[a] ? v : hi[a];
-      }
-    }
     test_alloc ta;
     nbs_context *ctx = counted_context(&ta);
     ASSERT_TRUE(ctx != NULL);
@@ -266,26 +305,53 @@ static void test_nbs_block_steps(void) {
     size_t pairs;
     nbs_pairs(ctx, &pairs);
     ASSERT_OK(nbs_context_reserve(ctx, 0, 2 * pairs));
-    const long calls = ta.calls;
-    uint64_t rng = 0x9e3779b97f4a7c15ull;
-    int step = 1;
-    for (; step <= 300 && ta.calls == calls; step++) {
-      for (int64_t k = 0; k < s.n * dim; k++) {
-        rng = rng * 6364136223846793005ull + 1442695040888963407ull;
-        const double u = (double)(rng >> 11) * 0x1p-53;
-        const int a = (int)(k % dim);
-        double v = s.coords[k] + 0.02 * s.diameter * (2.0 * u - 1.0);
-        if (v < lo[a]) v = 2.0 * lo[a] - v;
-        if (v > hi[a]) v = 2.0 * hi[a] - v;
-        s.coords[k] = v;
-      }
-      ASSERT_OK(nbs_detect(ctx, &in, &def));
-    }
-    CHECK_MSG(ta.calls == calls, "%dD: NBS allocated %ld times at step %d", dim,
-              ta.calls - calls, step - 1);
+    const int step = steps_allocating(ctx, &ta, &s, &def, 300);
+    CHECK_MSG(step == 0, "%dD: NBS allocated at step %d", dim, step);
     nbs_context_destroy(ctx);
     CHECK_EQ(ta.live, 0);
     scene_free(&s);
+  }
+}
+
+/* nbs_context_reserve with threads: cellsort's threads stage their pairs in lists of their
+ * own, and a reservation makes each hold every pair, so that neither the first detection
+ * nor time steps allocate, however the chunks fall to the threads (NBS_STEAL=first: each
+ * thread takes a chunk of another's part first, so every list is used). Before the
+ * reservation covered them, a first detection of N = 1e6 on two threads allocated 16 times
+ * after reserving, and its steps 12 more. Without OpenMP the context runs one thread. */
+static void test_reserve_threads(void) {
+  for (int dim = 2; dim <= 3; dim++) {
+    for (int steal = 0; steal < 2; steal++) {
+      scene s = test_scene(SCENE_UNIFORM, dim, 60000, 0.5);
+      nbs_input in = scene_input(&s);
+      nbs_detect_def def = nbs_default_detect_def();
+      nbs_context *once;
+      ASSERT_OK(nbs_context_create(NULL, &once));
+      ASSERT_OK(nbs_detect(once, &in, &def));
+      size_t pairs;
+      nbs_pairs(once, &pairs);
+      nbs_context_destroy(once);
+
+      if (steal) ASSERT_TRUE(setenv("NBS_STEAL", "first", 1) == 0);
+      test_alloc ta = {0, 0, 0, -1, 0, 0};
+      nbs_context_def cdef = nbs_default_context_def();
+      cdef.allocator = test_allocator(&ta);
+      cdef.threads = 2;
+      nbs_context *ctx;
+      ASSERT_OK(nbs_context_create(&cdef, &ctx));
+      unsetenv("NBS_STEAL");
+      ASSERT_OK(nbs_context_reserve(ctx, s.n, pairs + pairs / 8));
+      const long calls = ta.calls;
+      ASSERT_OK(nbs_detect(ctx, &in, &def));
+      CHECK_MSG(ta.calls == calls, "%dD steal %d: %ld allocations in the first detection",
+                dim, steal, ta.calls - calls);
+      const int step = steps_allocating(ctx, &ta, &s, &def, 10);
+      CHECK_MSG(step == 0, "%dD steal %d: allocated at step %d", dim, steal, step);
+      CHECK_EQ(nbs_context_bytes(ctx), ta.live_bytes);
+      nbs_context_destroy(ctx);
+      CHECK_EQ(ta.live, 0);
+      scene_free(&s);
+    }
   }
 }
 
@@ -379,6 +445,7 @@ int main(int argc, char **argv) {
       {"no_allocation_after_first", test_no_allocation_after_first},
       {"nbs_block_steps", test_nbs_block_steps},
       {"reserve", test_reserve},
+      {"reserve_threads", test_reserve_threads},
       {"whole_list_room", test_whole_list_room},
   };
   return test_main(argc, argv, tests, sizeof tests / sizeof *tests);

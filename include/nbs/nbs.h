@@ -170,7 +170,10 @@ NBS_API size_t nbs_context_peak_bytes(const nbs_context *ctx);
 
 /* Grows the context ahead of time so that detections of up to n elements with up to
  * pairs pairs allocate nothing for their elements or pairs (cell arrays still follow the
- * domain's extent). NBS_ERR_NULL, NBS_ERR_COUNT, NBS_ERR_NOMEM, NBS_ERR_BUSY. */
+ * domain's extent). With threads, each of the context's threads gets a list of `pairs` as
+ * well (cellsort's threads stage their pairs in lists of their own, and a thread may find
+ * all of them): 8 * pairs bytes for the buffer and as much again per thread.
+ * NBS_ERR_NULL, NBS_ERR_COUNT, NBS_ERR_NOMEM, NBS_ERR_BUSY. */
 NBS_API nbs_status nbs_context_reserve(nbs_context *ctx, int64_t n, size_t pairs);
 
 /* The message of the last failed call on this context, with detail where there is one
@@ -228,7 +231,11 @@ NBS_API nbs_detect_def nbs_default_detect_def(void);
  * unless it finds more pairs than the buffer has held before, or, with NBS, its two fullest
  * neighbouring layers (2D: rows) hold more elements than its layer block has room for: the
  * first detection's two fullest and four standard deviations of that count more, which a
- * simulation's steps stay within unless its elements crowd into fewer layers.
+ * simulation's steps stay within unless its elements crowd into fewer layers. With threads
+ * (cellsort, and auto), each thread stages its pairs in a list of its own, which grows (by
+ * half again) when the thread finds more than it has before: the threads share the work by
+ * the cores' speeds, so their shares move from step to step, and a few of a simulation's
+ * first steps allocate. nbs_context_reserve with the pairs makes every list hold them all.
  * Errors: NBS_ERR_NULL, NBS_ERR_DIM, NBS_ERR_COUNT, NBS_ERR_COORD, NBS_ERR_RADIUS,
  * NBS_ERR_ALGORITHM, NBS_ERR_MODE, NBS_ERR_BUDGET, NBS_ERR_EXTENT, NBS_ERR_NOMEM,
  * NBS_ERR_PAIRS, NBS_ERR_STOPPED, NBS_ERR_BUSY (called from this detection's own callback).
