@@ -411,11 +411,6 @@ bool nbs__nbs_fold(const nbs__run *run, int64_t lists[3]);
  * keep their heads within n / 64. Element k is on list k mod ways of its layer; the walks
  * of steps 3 and 4 go down them side by side. */
 int nbs__nbs_zways(int dim, int64_t nl, int64_t n);
-/* The entries NBS's layer block is allocated with when `need` entries (the two fullest
- * neighbouring layers; 2D rows) are needed of n elements: the first block (grown = false)
- * need and four standard deviations of a count of need, a later growth an eighth more;
- * never more than n. */
-int64_t nbs__nbs_block_cap(int64_t need, int64_t n, bool grown);
 nbs_status nbs__cellsort(nbs__run *run);
 /* A time step's pass over the input (see cellsort.c), in place of nbs__prepare_scan where
  * the context holds a cell order it can start from and `asked` may run cellsort; returns

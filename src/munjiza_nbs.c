@@ -724,7 +724,11 @@ static inline void nbs__nbs_clear(int32_t *H, const int32_t *R, int32_t top) {
 
 /* ---- the detection (3D: section 3.10, steps of the pseudocode on p. 127; 2D: 3.8) ---- */
 
-int64_t nbs__nbs_block_cap(int64_t need, int64_t n, bool grown) {
+/* The entries the layer block is allocated with when `need` entries (the two fullest
+ * neighbouring layers; 2D rows) are needed of n elements: the first block (grown = false)
+ * need and four standard deviations of a count of need, a later growth an eighth more;
+ * never more than n. */
+static int64_t nbs__nbs_block_cap(int64_t need, int64_t n, bool grown) {
   const int64_t slack = grown ? need / 8 : (int64_t)ceil(4.0 * sqrt((double)need));
   return need + slack < n ? need + slack : n;
 }
@@ -734,9 +738,9 @@ int64_t nbs__nbs_block_cap(int64_t need, int64_t n, bool grown) {
  * allocated with slack (nbs__nbs_block_cap), so that time steps do not allocate:
  *  - the first, four standard deviations of a count of `need` (4 sqrt(need) entries, 2.8% at
  *    N = 1e6 in 3D): the two fullest layers of a scene whose elements move about hold a
- *    few sqrt(need) more or less from step to step. Allocated exactly, the block grew at
- *    the first or second step of a random walk (N = 1e5 and 1e6, 3D and 2D, steps of 0.02
- *    diameters), which the header's promise of no allocation after the first detection
+ *    few sqrt(need) more or less from step to step. Allocated exactly, the block grew within
+ *    the first 40 steps of a random walk (N = 5000 to 1e6, 3D and 2D, steps of 0.02
+ *    diameters; at the first or second in 3D), which the header's promise of no allocation after the first detection
  *    does not allow; with the slack, none in 1000 steps (tests/test_memory.c,
  *    nbs_block_steps);
  *  - a later, larger need (the elements crowd into fewer layers), an eighth more, so that a

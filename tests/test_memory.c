@@ -9,6 +9,7 @@
 #include "test.h"
 #include "util.h"
 
+#include <math.h>
 #include <stdlib.h>
 
 /* The run the library derives for `in` (nbs__prepare: its grid); aborts if it cannot. */
@@ -81,8 +82,11 @@ static void test_nbs_formula(void) {
                                 : (ways + 2) * nl[2] + 4 * nl[1] + 4 * nl[0] + n;
         /* a block entry: 32 bytes, 8 more with radii, 4 more in 3D (the y-link) */
         const int64_t entry = 32 + (in.radii ? 8 : 0) + (dim == 3 ? 4 : 0);
-        /* the block: the two fullest neighbouring layers and a first detection's slack */
-        const int64_t block = nbs__nbs_block_cap(nbs_block_entries(ctx, &in), n, false);
+        /* the block: the two fullest neighbouring layers M and a first detection's slack of
+         * ceil(4 sqrt(M)) entries, at most n in all */
+        const int64_t most = nbs_block_entries(ctx, &in);
+        int64_t block = most + (int64_t)ceil(4.0 * sqrt((double)most));
+        if (block > n) block = n;
         int64_t formula = ints * 4 + (block + 1) * entry;
         int64_t extra = (int64_t)st.work_bytes - formula;
         CHECK_MSG(extra >= 0 && extra <= 128,
@@ -195,11 +199,11 @@ static void test_screening_cells(void) {
   }
 }
 
-/* A context of default settings on the counting allocator *ta (reset here); NULL if it
- * cannot be created. */
-static nbs_context *counted_context(test_alloc *ta) {
+/* A context of the settings def (NULL: the defaults) on the counting allocator *ta
+ * (reset here); NULL if it cannot be created. */
+static nbs_context *counted_context(test_alloc *ta, const nbs_context_def *def) {
   *ta = (test_alloc){0, 0, 0, -1, 0, 0};
-  nbs_context_def cdef = nbs_default_context_def();
+  nbs_context_def cdef = def ? *def : nbs_default_context_def();
   cdef.allocator = test_allocator(ta);
   nbs_context *ctx;
   return nbs_context_create(&cdef, &ctx) == NBS_OK ? ctx : NULL;
@@ -214,7 +218,7 @@ static void test_no_allocation_after_first(void) {
     for (size_t a = 0; a < sizeof algos / sizeof *algos; a++) {
       for (int mode = 0; mode < 2; mode++) {
         test_alloc ta;
-        nbs_context *ctx = counted_context(&ta);
+        nbs_context *ctx = counted_context(&ta, NULL);
         ASSERT_TRUE(ctx != NULL);
         nbs_input in = scene_input(&s);
         nbs_detect_def def = nbs_default_detect_def();
@@ -242,14 +246,12 @@ static void test_no_allocation_after_first(void) {
 
 /* A simulation's time step for the scene s: every coordinate moves by up to 0.02
  * diameters, reflected into the box [lo, hi] (the first step's bounding box, so that the
- * cells per axis stay as they were). *rng is the state of the steps' random numbers. */
+ * cells per axis stay as they were). *rng is the state of test_unit's sequence. */
 static void walk_step(scene *s, const double lo[3], const double hi[3], uint64_t *rng) {
   const int dim = s->dim;
   for (int64_t k = 0; k < s->n * dim; k++) {
-    *rng = *rng * 6364136223846793005ull + 1442695040888963407ull;
-    const double u = (double)(*rng >> 11) * 0x1p-53;
     const int a = (int)(k % dim);
-    double v = s->coords[k] + 0.02 * s->diameter * (2.0 * u - 1.0);
+    double v = s->coords[k] + 0.02 * s->diameter * (2.0 * test_unit(rng) - 1.0);
     if (v < lo[a]) v = 2.0 * lo[a] - v;
     if (v > hi[a]) v = 2.0 * hi[a] - v;
     s->coords[k] = v;
@@ -269,8 +271,8 @@ static void scene_box(const scene *s, double lo[3], double hi[3]) {
 }
 
 /* Detects `steps` time steps of s (walk_step) with the context ctx on the counting
- * allocator *ta and the detection def, stopping at the first that allocates; returns that
- * step, or 0 if none did. */
+ * allocator *ta and the detection def, stopping at the first that allocates or fails (a
+ * failure is a test failure here); returns that step, or 0 if none did. */
 static int steps_allocating(nbs_context *ctx, const test_alloc *ta, scene *s,
                             const nbs_detect_def *def, int steps) {
   double lo[3], hi[3];
@@ -280,7 +282,11 @@ static int steps_allocating(nbs_context *ctx, const test_alloc *ta, scene *s,
   const long calls = ta->calls;
   for (int step = 1; step <= steps; step++) {
     walk_step(s, lo, hi, &rng);
-    if (nbs_detect(ctx, &in, def) != NBS_OK) return -step;
+    const nbs_status st = nbs_detect(ctx, &in, def);
+    if (st != NBS_OK) {
+      CHECK_MSG(false, "step %d: %s: %s", step, nbs_status_name(st), nbs_context_error(ctx));
+      return step;
+    }
     if (ta->calls != calls) return step;
   }
   return 0;
@@ -296,7 +302,7 @@ static void test_nbs_block_steps(void) {
   for (int dim = 2; dim <= 3; dim++) {
     scene s = test_scene(SCENE_UNIFORM, dim, 20000, 0.5);
     test_alloc ta;
-    nbs_context *ctx = counted_context(&ta);
+    nbs_context *ctx = counted_context(&ta, NULL);
     ASSERT_TRUE(ctx != NULL);
     nbs_input in = scene_input(&s);
     nbs_detect_def def = nbs_default_detect_def();
@@ -333,13 +339,12 @@ static void test_reserve_threads(void) {
       nbs_context_destroy(once);
 
       if (steal) ASSERT_TRUE(setenv("NBS_STEAL", "first", 1) == 0);
-      test_alloc ta = {0, 0, 0, -1, 0, 0};
       nbs_context_def cdef = nbs_default_context_def();
-      cdef.allocator = test_allocator(&ta);
       cdef.threads = 2;
-      nbs_context *ctx;
-      ASSERT_OK(nbs_context_create(&cdef, &ctx));
+      test_alloc ta;
+      nbs_context *ctx = counted_context(&ta, &cdef);
       unsetenv("NBS_STEAL");
+      ASSERT_TRUE(ctx != NULL);
       ASSERT_OK(nbs_context_reserve(ctx, s.n, pairs + pairs / 8));
       const long calls = ta.calls;
       ASSERT_OK(nbs_detect(ctx, &in, &def));
@@ -361,7 +366,7 @@ static void test_reserve_threads(void) {
 static void test_reserve(void) {
   scene s = test_scene(SCENE_UNIFORM, 3, 4000, 0.5);
   test_alloc ta;
-  nbs_context *ctx = counted_context(&ta);
+  nbs_context *ctx = counted_context(&ta, NULL);
   ASSERT_TRUE(ctx != NULL);
   ASSERT_OK(nbs_context_reserve(ctx, 4000, 400000));
   CHECK_STATUS(nbs_context_reserve(ctx, -1, 0), NBS_ERR_COUNT);
@@ -398,7 +403,7 @@ static void test_reserve(void) {
  * step that found a few more). */
 static void test_whole_list_room(void) {
   test_alloc ta;
-  nbs_context *ctx = counted_context(&ta);
+  nbs_context *ctx = counted_context(&ta, NULL);
   ASSERT_TRUE(ctx != NULL);
   nbs__run run;
   memset(&run, 0, sizeof run);
@@ -422,9 +427,9 @@ static void test_whole_list_room(void) {
 
   /* within max_pairs, or NBS_ERR_PAIRS: never a buffer smaller than the list */
   nbs_context_def cdef = nbs_default_context_def();
-  cdef.allocator = test_allocator(&ta);
   cdef.max_pairs = 100000;
-  ASSERT_OK(nbs_context_create(&cdef, &ctx));
+  ctx = counted_context(&ta, &cdef);
+  ASSERT_TRUE(ctx != NULL);
   memset(&run, 0, sizeof run);
   run.ctx = ctx;
   ASSERT_OK(nbs__room_whole(&run, 90000));

@@ -235,8 +235,8 @@ NBS_API nbs_detect_def nbs_default_detect_def(void);
  * (cellsort, and auto), each thread stages its pairs in a list of its own, which grows (by
  * half again) when the thread finds more than it has room for: the threads share the work
  * by the cores' speeds, so their shares move from step to step, and such steps come, more
- * rarely as the lists grow (N = 2e5, two threads, 300 steps: at steps 1, 11, 32, 48, 165).
- * nbs_context_reserve with the pairs makes every list hold them all: then none comes.
+ * rarely as the lists grow. nbs_context_reserve with the pairs makes every list hold them
+ * all: then none comes.
  * Errors: NBS_ERR_NULL, NBS_ERR_DIM, NBS_ERR_COUNT, NBS_ERR_COORD, NBS_ERR_RADIUS,
  * NBS_ERR_ALGORITHM, NBS_ERR_MODE, NBS_ERR_BUDGET, NBS_ERR_EXTENT, NBS_ERR_NOMEM,
  * NBS_ERR_PAIRS, NBS_ERR_STOPPED, NBS_ERR_BUSY (called from this detection's own callback).
