@@ -1373,7 +1373,8 @@ int nbs__cellsort_simd(void) {
 }
 
 /* The input's size (bytes of coordinates and radii) above which cellsort sorts by the
- * partition (nbs__cs_partition) instead of gathering: 1 GiB. It was 32 MiB, about the
+ * partition (nbs__cs_partition) instead of gathering: 1 GiB; from 8 MiB up to it, the
+ * context measures which is faster on the machine (nbs__cs_way). It was 32 MiB, about the
  * last-level cache of a server processor, until the gather's prefetches went in two stages
  * (nbs__cs_prefetch); since then the gather wins up to hundreds of MB, and the partition
  * only beyond (interleaved, ns per element, one thread, random order, partition against
@@ -1390,6 +1391,14 @@ size_t nbs__cellsort_partition_min(void) {
   if (e && strcmp(e, "always") == 0) return 0;
   if (e && strcmp(e, "never") == 0) return SIZE_MAX;
   return (size_t)1 << 30;
+}
+
+/* Whether a context measures which way its detections from scratch take below that size
+ * (nbs__cs_way): unless NBS_PARTITION says "always" or "never", read when the context is
+ * created. */
+bool nbs__cellsort_tune(void) {
+  const char *e = getenv("NBS_PARTITION");
+  return !(e && (strcmp(e, "always") == 0 || strcmp(e, "never") == 0));
 }
 
 /* NBS_STEAL=first in the environment, read when a context is created: in the work the
@@ -2690,6 +2699,67 @@ static size_t nbs__cs_input_bytes(const nbs__cs *c) {
   return nbs__input_bytes(c->n, c->dim, c->rs != NULL);
 }
 
+/* Which way a detection from scratch of run's input, on `threads` threads, takes: 1 the sort
+ * and the gather (steps 1-3), 2 the partition (nbs__cs_partition; it needs packed keys, and
+ * gives way to the sort and the gather where it cannot run). Chosen once per detection
+ * (run->cs_way), before nbs__cellsort_fresh's pass, which only the first way uses.
+ *  - Up to NBS__CS_TUNE_MIN bytes of input (coordinates and radii), the gather: its reads at
+ *    random hit the caches.
+ *  - Beyond cs_part_min (1 GiB, or what NBS_PARTITION says), the partition.
+ *  - Between, measured. Which way is faster there depends on the machine, not on the
+ *    input: the gather waits on memory once per element, at random, the partition streams
+ *    the input and writes whole lines past the caches. 3D, N = 1e6 (24 MB), random order,
+ *    one thread, ns per element, sort and gather against partition: on the AMD EPYC
+ *    instances (Zen 5), where a random read of memory costs about 5 ns in a stream of them
+ *    (bench/floor.c), 32.5 against 37.9 (see nbs__cellsort_partition_min); on an Intel Xeon
+ *    guest (Sapphire Rapids class, 2026-11-28) whose random reads cost 17-20 ns in a stream
+ *    (12 lines in flight at 200 ns; its last-level cache gave nothing beyond 2 MiB), and a
+ *    plain store that misses about 12 ns per element in a scatter, 75.3-78.5 against
+ *    62.3-66.0 (interleaved, four rounds; the same bytes). So the context times its first
+ *    detections from scratch, NBS__CS_TUNE_TRIES of each way, the sort and the gather first
+ *    (each from the detection's start to its search, the input's pass included: the
+ *    partition has input.c's pass, the other way nbs__cellsort_fresh's), and takes the
+ *    faster way from then on, for inputs of the class it measured (the dimension, the
+ *    threads and the power of two of the bytes; another class measures again). A try costs
+ *    at most the difference between the two ways, once; the output is the same bytes either
+ *    way (test_determinism). */
+#define NBS__CS_TUNE_MIN ((size_t)8 << 20)
+#define NBS__CS_TUNE_TRIES 2
+static int nbs__cs_way(nbs__run *run, int threads) {
+  if (run->cs_way) return run->cs_way;
+  nbs_context *ctx = run->ctx;
+  const size_t bytes = nbs__input_bytes(run->n, run->dim, run->r != NULL);
+  int way = 1;
+  if (bytes > ctx->cs_part_min) {
+    way = 2;
+  } else if (ctx->cs_tune && bytes > NBS__CS_TUNE_MIN) {
+    const int cls = run->dim | threads << 2 | nbs__bits((uint64_t)bytes) << 10;
+    if (cls != ctx->cs_tune_class) {
+      ctx->cs_tune_class = cls;
+      ctx->cs_tune_tries[0] = ctx->cs_tune_tries[1] = 0;
+      ctx->cs_tune_best[0] = ctx->cs_tune_best[1] = 0.0;
+    }
+    const int *tries = ctx->cs_tune_tries;
+    if (tries[0] >= NBS__CS_TUNE_TRIES && tries[1] >= NBS__CS_TUNE_TRIES) {
+      way = ctx->cs_tune_best[1] < ctx->cs_tune_best[0] ? 2 : 1;
+    } else {
+      way = tries[0] <= tries[1] ? 1 : 2;
+      run->cs_try = true;
+    }
+  }
+  run->cs_way = (int8_t)way;
+  return way;
+}
+
+void nbs__cellsort_tried(nbs_context *ctx, const nbs__run *run, double seconds) {
+  if (!run->cs_tried || run->n <= 0) return; /* started from the last order: no try */
+  const int w = run->cs_tried == 1 ? 0 : 1;
+  /* the partition that could not run is never taken for this class */
+  const double per = run->cs_tried == 3 ? DBL_MAX : seconds / (double)run->n;
+  if (ctx->cs_tune_tries[w] == 0 || per < ctx->cs_tune_best[w]) ctx->cs_tune_best[w] = per;
+  ctx->cs_tune_tries[w]++;
+}
+
 /* Place p of the cell order (xs, ys, zs, rs) takes element e's coordinates (and radius)
  * from the input (x, r): the gather, the time-step pass and merge. The arrays come as
  * arguments, so that the loops that call it hold them in locals: read through c at every
@@ -3940,7 +4010,7 @@ static uint64_t *nbs__cs_step1_at(uint64_t *key, double *xs, int bits) {
 
 /* From scratch: 1. the keys in element order, 2. their radix sort, 3. the gather of the
  * coordinates (and radii) in cell order. */
-static void nbs__cs_sort_gather(const nbs__cs *c, const nbs__run *run, const nbs__cs_keying *kg,
+static void nbs__cs_sort_gather(const nbs__cs *c, nbs__run *run, const nbs__cs_keying *kg,
                                 bool packed, int eb, int bits, bool words, uint32_t *hist,
                                 int threads, char *spare, size_t spare_bytes) {
   const int32_t n = c->n;
@@ -3955,11 +4025,12 @@ static void nbs__cs_sort_gather(const nbs__cs *c, const nbs__run *run, const nbs
   const bool odd = k0 == tk;
   uint64_t *k1 = odd ? c->key : tk;
   int32_t *i0 = odd ? ti : c->idx, *i1 = odd ? c->idx : ti;
-  /* 1-3 at once, where the input is larger than 1 GiB */
-  const size_t input = nbs__cs_input_bytes(c);
+  /* 1-3 at once, where the input is larger than 1 GiB, or the context has measured the
+   * partition faster (nbs__cs_way) */
+  const bool part = packed && nbs__cs_way(run, threads) == 2;
   run->ctx->cs_partitioned =
-      packed && input > run->ctx->cs_part_min &&
-      nbs__cs_partition(c, run, kg, eb, dg, hist, threads, spare, spare_bytes);
+      part && nbs__cs_partition(c, run, kg, eb, dg, hist, threads, spare, spare_bytes);
+  if (run->cs_try) run->cs_tried = (int8_t)(run->ctx->cs_partitioned ? 2 : part ? 3 : 1);
   if (run->ctx->cs_partitioned) return;
   /* 1-2 by the crowded core's keys, where they fit a word with the element and the whole
    * keys do not, or where the whole keys do but take four passes or more and the core's two
@@ -4373,7 +4444,7 @@ bool nbs__cellsort_fresh(nbs__run *run, const nbs_input *in, nbs_algorithm asked
   if (nbs__cs_layout(dim, n, run->r != NULL, threads, at, &stride) > ctx->work_size) {
     return false;
   }
-  if (nbs__input_bytes(n, dim, run->r != NULL) > ctx->cs_part_min) return false;
+  if (nbs__cs_way(run, threads) == 2) return false; /* the partition: input.c's pass */
   /* the radii, where given, by input.c's pass of them: their largest sizes the cells */
   double rmax = 0.5 * in->diameter;
   if (run->r && !nbs__radii_max(run, &rmax)) return false; /* input.c's passes name it */

@@ -291,6 +291,8 @@ nbs_status nbs_context_create(const nbs_context_def *def, nbs_context **out) {
   ctx->threads = d.threads;
   ctx->simd = nbs__cellsort_simd();
   ctx->cs_part_min = nbs__cellsort_partition_min();
+  ctx->cs_tune = nbs__cellsort_tune();
+  ctx->cs_tune_class = -1;
   ctx->cs_steal_first = nbs__cellsort_steal_first();
   ctx->bytes = ctx->peak_bytes = sizeof *ctx;
   ctx->error_element = -1;
@@ -507,6 +509,7 @@ static nbs_status nbs__detect(nbs_context *ctx, const nbs_input *in, const nbs_d
   if (run.t_search > 0.0) st->seconds_search = t_found - run.t_search;
   st->seconds = t_found - t_start;
   if (s != NBS_OK) return s;
+  if (run.cs_try && run.t_search > 0.0) nbs__cellsort_tried(ctx, &run, run.t_search - t_start);
 
   ctx->pairs_count = run.callback ? 0 : run.count;
   ctx->pairs_valid = true;

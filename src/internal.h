@@ -152,6 +152,18 @@ struct nbs_context {
    * whether the last from-scratch detection took it (read by the tests). */
   size_t cs_part_min;
   bool cs_partitioned;
+  /* Between NBS__CS_TUNE_MIN bytes and cs_part_min, which of the two ways a detection from
+   * scratch takes is measured (nbs__cs_way): cs_tune says so (NBS_PARTITION unset); the
+   * measurements are of inputs of class cs_tune_class (dimension, threads and the power of
+   * two of the input's bytes; another class starts them again): cs_tune_tries[w] detections
+   * of way w (0 the sort and the gather, 1 the partition) timed, the fastest of them
+   * cs_tune_best[w] seconds per element from the detection's start to its search (the
+   * partition's +infinity where it could not run). Once each way has NBS__CS_TUNE_TRIES,
+   * the faster one is taken. */
+  bool cs_tune;
+  int cs_tune_class;
+  int cs_tune_tries[2];
+  double cs_tune_best[2];
   /* cellsort's threaded sweep (nbs__cs_sweep_parts): the chunks the last detection's threads
    * took from other threads' parts (read by the tests), and NBS_STEAL=first, which
    * makes every thread take one first (nbs__cellsort_steal_first). */
@@ -229,6 +241,14 @@ typedef struct nbs__run {
    * same. */
   bool order_dropped;
   int dropped_eb;
+  /* cellsort's way from scratch for this detection (nbs__cs_way): 0 not yet chosen, 1 the
+   * sort and the gather, 2 the partition; cs_try says it is one of the context's timed
+   * tries (cs_tune), and cs_tried what the try did (0: not taken, the detection having
+   * started from the last order; 1 or 2: that way; 3: the partition could not run),
+   * recorded after the detection (nbs__cellsort_tried). */
+  int8_t cs_way;
+  bool cs_try;
+  int8_t cs_tried;
   bool reused_order;  /* cellsort started from the last cell order */
   int64_t moved;      /* the elements it sorted again */
   /* When the algorithm began its search, every element in place (nbs__search_begins; 0:
@@ -445,6 +465,10 @@ nbs__twice4(const int32_t *p) {
 }
 #endif
 size_t nbs__cellsort_partition_min(void);
+bool nbs__cellsort_tune(void);
+/* After a detection that succeeded: where it was one of cellsort's timed tries (run->cs_try),
+ * its time from its start to its search, `seconds`, is recorded (nbs_context.cs_tune). */
+void nbs__cellsort_tried(nbs_context *ctx, const nbs__run *run, double seconds);
 bool nbs__cellsort_steal_first(void);
 
 /* Work-block layouts, for work_kind. */

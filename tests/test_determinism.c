@@ -36,6 +36,7 @@
 #include "test.h"
 #include "util.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 
@@ -499,6 +500,108 @@ static void test_partition(void) {
     }
     scene_free(&s);
   }
+}
+
+/* ctx detects s with cellsort from scratch (fresh) or from the last order, into *out. */
+static void tuned_detect(nbs_context *ctx, const scene *s, bool fresh, pair_list *out) {
+  nbs_input in = scene_input(s);
+  nbs_detect_def def = nbs_default_detect_def();
+  def.algorithm = NBS_CELLSORT;
+  def.fresh = fresh;
+  out->p = NULL;
+  out->count = 0;
+  ASSERT_OK(nbs_detect(ctx, &in, &def));
+  size_t count;
+  const nbs_pair *p = nbs_pairs(ctx, &count);
+  out->p = malloc((count ? count : 1) * sizeof *out->p);
+  if (!out->p) abort();
+  if (count) memcpy(out->p, p, count * sizeof *p);
+  out->count = count;
+}
+
+/* The way a detection from scratch takes between 8 MiB of input and 1 GiB (nbs__cs_way): by
+ * default the context times its first such detections, the sort and the gather, then the
+ * partition, twice each, alternating, and takes the faster way from then on; a detection
+ * that starts from the last order is not a try; an input of another class (2D, or 3D of
+ * another power of two of bytes) is measured again, and one below 8 MiB never partitions;
+ * NBS_PARTITION=never and =always keep to their way and measure nothing. A sheet (most
+ * elements in one layer, under one top digit) that the partition cannot take counts as its
+ * tries, and is never partitioned after. Every detection gives the bytes of the sort and the
+ * gather (NBS_PARTITION=never), with one thread and two. */
+static void test_tuned_way(void) {
+  scene s3 = det_scene(DET_UNIFORM, 3, 400000, 75.0, 0.0, 61);  /* 9.6 MB */
+  scene s2 = det_scene(DET_UNIFORM, 2, 600000, 970.0, 0.0, 62); /* 9.6 MB */
+  scene sheet = det_scene(DET_UNIFORM, 3, 420000, 550.0, 0.0, 63);
+  for (int64_t k = 0; k < sheet.n; k++) {
+    if (k % 7 != 0) sheet.coords[k * 3 + 2] /= 550.0;
+  }
+  scene small = det_scene(DET_UNIFORM, 3, 300000, 68.0, 0.0, 64); /* 7.2 MB */
+  const scene *scenes[] = {&s3, &s2, &sheet, &small};
+  const char *names[] = {"3D", "2D", "sheet", "3D below 8 MiB"};
+  for (int threads = 1; threads <= 2; threads++) {
+    nbs_context_def cdef = nbs_default_context_def();
+    cdef.threads = threads;
+    nbs_context *never, *always, *tuned;
+    ASSERT_TRUE(setenv("NBS_PARTITION", "never", 1) == 0);
+    ASSERT_OK(nbs_context_create(&cdef, &never));
+    ASSERT_TRUE(setenv("NBS_PARTITION", "always", 1) == 0);
+    ASSERT_OK(nbs_context_create(&cdef, &always));
+    unsetenv("NBS_PARTITION");
+    ASSERT_OK(nbs_context_create(&cdef, &tuned));
+    CHECK_TRUE(tuned->cs_tune && !never->cs_tune && !always->cs_tune);
+    for (int sc = 0; sc < 4; sc++) {
+      const scene *s = scenes[sc];
+      pair_list ref, got;
+      tuned_detect(never, s, true, &ref);
+      CHECK_MSG(!never->cs_partitioned, "%s: NBS_PARTITION=never partitioned", names[sc]);
+      tuned_detect(always, s, true, &got);
+      CHECK_MSG(always->cs_partitioned == (sc != 2), "%s: NBS_PARTITION=always: partitioned %d",
+                names[sc], (int)always->cs_partitioned);
+      CHECK_MSG(same_bytes(&got, &ref), "%s, %d threads: NBS_PARTITION=always differs",
+                names[sc], threads);
+      pair_list_free(&got);
+      /* the tries, then the way chosen: 1 the sort and the gather, 2 the partition */
+      const int expect[4] = {1, 2, 1, 2};
+      int took[8];
+      for (int k = 0; k < 8 && !test_failures; k++) {
+        /* detection 5 starts from the last order: no try, no change */
+        const bool fresh = k != 5;
+        tuned_detect(tuned, s, fresh, &got);
+        took[k] = tuned->cs_partitioned ? 2 : 1;
+        CHECK_MSG(same_bytes(&got, &ref), "%s, %d threads, detection %d: the bytes differ",
+                  names[sc], threads, k);
+        pair_list_free(&got);
+        if (sc == 3) {
+          CHECK_MSG(took[k] == 1, "%s: detection %d partitioned", names[sc], k);
+        } else if (sc == 2) {
+          CHECK_MSG(took[k] == 1, "%s: detection %d partitioned", names[sc], k);
+        } else if (k < 4) {
+          CHECK_MSG(took[k] == expect[k], "%s, %d threads: try %d took way %d", names[sc],
+                    threads, k, took[k]);
+        } else if (k != 5) {
+          CHECK_MSG(took[k] == took[4], "%s, %d threads: detection %d took way %d after %d",
+                    names[sc], threads, k, took[k], took[4]);
+        }
+      }
+      if (sc < 3) {
+        CHECK_MSG(tuned->cs_tune_tries[0] == 2 && tuned->cs_tune_tries[1] == 2,
+                  "%s, %d threads: %d and %d tries", names[sc], threads,
+                  tuned->cs_tune_tries[0], tuned->cs_tune_tries[1]);
+        const int faster = tuned->cs_tune_best[1] < tuned->cs_tune_best[0] ? 2 : 1;
+        CHECK_MSG(took[4] == faster, "%s, %d threads: took way %d, %d was faster", names[sc],
+                  threads, took[4], faster);
+      }
+      if (sc == 2) {
+        CHECK_MSG(tuned->cs_tune_best[1] == DBL_MAX, "sheet: the partition's time %g",
+                  tuned->cs_tune_best[1]);
+      }
+      pair_list_free(&ref);
+    }
+    nbs_context_destroy(never);
+    nbs_context_destroy(always);
+    nbs_context_destroy(tuned);
+  }
+  for (int k = 0; k < 4; k++) scene_free((scene *)scenes[k]);
 }
 
 /* Moves elements k = first, first + every, ... by up to amp per axis (amp < 0: by -amp
@@ -1455,6 +1558,7 @@ int main(int argc, char **argv) {
       {"thread_counts", test_thread_counts},
       {"caller_threads", test_caller_threads},
       {"partition", test_partition},
+      {"tuned_way", test_tuned_way},
       {"kernels", test_kernels},
       {"time_steps", test_time_steps},
       {"step_pass", test_step_pass},
