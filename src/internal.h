@@ -141,7 +141,8 @@ struct nbs_context {
   nbs__cs_kept cs_kept;
   bool cs_kept_ok, cs_stepped;
   /* Whether the last detection sorted from scratch with the keys of nbs__cellsort_fresh's
-   * pass (its guessed keying was this detection's; read by the tests). */
+   * pass, or partitioned with its counts (its guessed keying was this detection's; read by
+   * the tests). */
   bool cs_fresh_words;
   /* How the last cellsort detection sorted its keys: -1 by the whole key (and before any),
    * else by its crowded core, this many elements (the outliers) apart (nbs__cs_core). Read
@@ -233,6 +234,9 @@ typedef struct nbs__run {
    * holds step 1's words made with the keying `pre`, of pre_bits bits, packed with pre_eb
    * element bits. */
   bool prewords;
+  /* Or, where the partition is to run, the pass counted the keys' top digit into each
+   * thread's histogram of the work block instead of making the words (precounts). */
+  bool precounts;
   nbs__cs_kept pre;
   int pre_bits, pre_eb;
   /* That pass overwrote the last detection's order of this n, which this detection would
