@@ -27,7 +27,11 @@
  *      random access. Where the input is larger than 1 GiB (3D N = 4.5e7, 2D 6.7e7),
  *      steps 1-3 are instead one partition by the top digit that carries the coordinates
  *      along in whole lines, then each bucket put in order in cache (nbs__cs_partition:
- *      N = 1e8, 3D 67.1 -> 62.2 ns per element, 2D 35.2 -> 30.6).
+ *      N = 1e8, 3D 67.1 -> 62.2 ns per element, 2D 35.2 -> 30.6); from 8 MiB to 1 GiB,
+ *      which of the two is faster depends on the machine's memory, and the context times
+ *      its first detections both ways and keeps the faster (nbs__cs_way: on an Intel guest
+ *      whose random reads of memory cost 4x the AMD instances', the partition, 3D N = 1e6
+ *      75-78 -> 62-66 ns per element).
  *      Tried and left out: the gather deferred into the sweep, each block gathering the
  *      places it is about to read (and, with threads, each thread first the places the next
  *      one reads before its range), so that the kernel's work would hide the gather's waits
@@ -3903,12 +3907,15 @@ static void nbs__cs_part_bucket(const nbs__cs_dst *d, uint32_t s0, int32_t len, 
 }
 
 /* Steps 1-3 at once, for packed keys, where the input is larger than 1 GiB
- * (nbs__cellsort_partition_min): the keys' top digit counted (a pass over the input, in
- * order, computing each key), each element's word and coordinates (and radius) moved to its
- * top digit's bucket (a second such pass, nbs__cs_part_scatter), and each bucket put in
- * order in the cache (nbs__cs_part_bucket). The result is that of the sort and the gather,
- * byte for byte: the partition is stable (each thread takes a contiguous part of the input
- * and writes after the threads before it in each bucket), and so is the bucket's sort.
+ * (nbs__cellsort_partition_min), or the context has timed it faster (nbs__cs_way): the keys'
+ * top digit counted (a pass over the input, in order, computing each key:
+ * nbs__cellsort_fresh's, which validates the input too, where the context holds its work
+ * block and the keying it guessed holds, `counted`; else one of its own), each element's
+ * word and coordinates (and radius) moved to its top digit's bucket (a second such pass,
+ * nbs__cs_part_scatter), and each bucket put in order in the cache (nbs__cs_part_bucket).
+ * The result is that of the sort and the gather, byte for byte: the partition is stable
+ * (each thread takes a contiguous part of the input and writes after the threads before it
+ * in each bucket), and so is the bucket's sort.
  * Why. The gather reads each element's coordinates at random from the caller's array; where
  * that array is far larger than the caches every read waits on memory, and the gather grew
  * from 2.6 ns per element at N = 1e4 to 15 at 1e7 (3D, perf), the largest part of the
