@@ -3509,6 +3509,100 @@ static void nbs__cs_core_split512(const nbs__cs_keying *kg, const double *x, int
 /* Bins per axis of nbs__cs_core's histograms: at most 2^12. */
 #define NBS__CS_CORE_BINS 12
 
+/* Step a of nbs__cs_core (and of nbs__cs_core_part): the crowded core's box, its corner lo
+ * and its sides' bits cw in each field of the whole key (bits of them in all, returned), from
+ * a sample of the elements; the coordinate arrays are its scratch. */
+static int nbs__cs_core_box(const nbs__cs *c, const nbs__run *run, const nbs__cs_keying *kg,
+                            int bits, uint64_t lo[3], int cw[3]) {
+  const int32_t n = c->n;
+  const int dim = c->dim;
+  const double *x = run->x;
+  /* the key's fields: x sub-cell, iy, iz; where each starts and its bits */
+  const int at[3] = {0, kg->sy, kg->sz};
+  const int wd[3] = {c->bx, c->by, dim == 3 ? bits - c->bx - c->by : 0};
+  uint64_t mask[3] = {0, 0, 0};
+  /* a. the histograms of a sample, every stride-th element (about 2^13 of them), in the
+   * coordinate arrays: at most 2^12 bins per axis, and at most n / 2, so that they and the
+   * sample's keys after them take at most 2 dim n + 8 n bytes of the arrays' 8 dim n */
+  int hb = 0;
+  while (hb < NBS__CS_CORE_BINS && ((int64_t)2 << hb) <= (int64_t)n) hb++;
+  for (int a = 0; a < dim; a++) mask[a] = ((uint64_t)1 << wd[a]) - 1; /* at most 33 bits */
+  uint32_t *hall = (uint32_t *)(void *)c->xs;
+  const int32_t stride = n >> 13 > 0 ? n >> 13 : 1;
+  const int64_t m = ((int64_t)n + stride - 1) / stride; /* the sample's size */
+  const int64_t need = m - m / (16 * dim);
+  /* the sample's keys, after the histograms */
+  uint64_t *sample = (uint64_t *)(void *)(hall + ((size_t)dim << hb));
+  /* each axis's window [lo, lo + span) of its field: the whole field, then the fewest bins
+   * that hold `need` of the sample, then within those the bins, finer, from the first to the
+   * last that hold any of it */
+  uint64_t span[3] = {1, 1, 1}, lo0[3] = {0, 0, 0};
+  for (int a = 0; a < 3; a++) lo[a] = 0;
+  for (int a = 0; a < dim; a++) span[a] = (uint64_t)1 << wd[a];
+  for (int round = 0; round < 2; round++) {
+    if (round == 1) memcpy(lo0, lo, 3 * sizeof *lo);
+    int sh[3] = {0, 0, 0};
+    size_t bins[3] = {1, 1, 1};
+    for (int a = 0; a < dim; a++) {
+      const int w = nbs__bits(span[a]);
+      sh[a] = w > hb ? w - hb : 0;
+      bins[a] = (size_t)((span[a] - 1) >> sh[a]) + 1; /* at most 2^hb */
+    }
+    memset(hall, 0, ((size_t)dim << hb) * sizeof *hall);
+    for (int64_t k = 0, s = 0; k < n; k += stride, s++) {
+      uint64_t kk;
+      if (round == 0) {
+        /* the sample's reads are far apart: ask for them ahead */
+        if (k + 16 * (int64_t)stride < n) {
+          __builtin_prefetch(x + (size_t)(k + 16 * (int64_t)stride) * (size_t)dim);
+        }
+        kk = nbs__cs_cellkey(kg, x + (size_t)k * (size_t)dim);
+        sample[s] = kk;
+      } else {
+        kk = sample[s];
+      }
+      for (int a = 0; a < dim; a++) {
+        const uint64_t v = ((kk >> at[a]) & mask[a]) - lo[a];
+        if (v < span[a]) hall[((size_t)a << hb) + (v >> sh[a])]++;
+      }
+    }
+    for (int a = 0; a < dim; a++) {
+      const uint32_t *h = hall + ((size_t)a << hb);
+      /* need, then all of the sample within the window */
+      int64_t want = need;
+      if (round == 1) {
+        want = 0;
+        for (size_t b = 0; b < bins[a]; b++) want += h[b];
+      }
+      size_t b0 = 0, best0 = 0, best = bins[a];
+      int64_t sum = 0;
+      for (size_t b1 = 0; b1 < bins[a]; b1++) {
+        sum += h[b1];
+        while (b0 < b1 && sum - h[b0] >= want) sum -= h[b0++];
+        if (sum >= want && b1 - b0 + 1 < best) {
+          best = b1 - b0 + 1;
+          best0 = b0;
+        }
+      }
+      const uint64_t l = (uint64_t)best0 << sh[a], w = (uint64_t)best << sh[a];
+      lo[a] += l;
+      span[a] = w < span[a] - l ? w : span[a] - l;
+    }
+  }
+  /* the box's sides are powers of two: their room beyond the window, half of it below, as
+   * far as the first round's window (elements beyond the sample's lowest are not left out
+   * for that; those the first round left out stay out) */
+  int cb = 0;
+  for (int a = 0; a < 3; a++) cw[a] = 0;
+  for (int a = 0; a < dim; a++) {
+    cw[a] = nbs__bits(span[a]);
+    const uint64_t below = (((uint64_t)1 << cw[a]) - span[a]) / 2;
+    lo[a] -= below < lo[a] - lo0[a] ? below : lo[a] - lo0[a];
+    cb += cw[a];
+  }
+  return cb;
+}
+
 /* Steps 1 and 2 where the keys do not fit a word with the element but those of a crowded
  * core would: a few elements far out (the sparse scene's 0.1% a million diameters away, the
  * clustered scene's 1%) stretch the grid until its keys need 60 bits, unpacked, while the
@@ -3565,87 +3659,10 @@ static bool nbs__cs_core(const nbs__cs *c, const nbs__run *run, const nbs__cs_ke
   uint64_t *key = c->key;
   int32_t *idx = c->idx;
   const bool packed = idx == NULL; /* the whole keys share a word with the element too */
-  /* the key's fields: x sub-cell, iy, iz; where each starts and its bits */
   const int at[3] = {0, kg->sy, kg->sz};
-  const int wd[3] = {c->bx, c->by, dim == 3 ? bits - c->bx - c->by : 0};
-  uint64_t mask[3] = {0, 0, 0};
-  /* a. the histograms of a sample, every stride-th element (about 2^13 of them), in the
-   * coordinate arrays: at most 2^12 bins per axis, and at most n / 2, so that they and the
-   * sample's keys after them take at most 2 dim n + 8 n bytes of the arrays' 8 dim n */
-  int hb = 0;
-  while (hb < NBS__CS_CORE_BINS && ((int64_t)2 << hb) <= (int64_t)n) hb++;
-  for (int a = 0; a < dim; a++) mask[a] = ((uint64_t)1 << wd[a]) - 1; /* at most 33 bits */
-  uint32_t *hall = (uint32_t *)(void *)c->xs;
-  const int32_t stride = n >> 13 > 0 ? n >> 13 : 1;
-  const int64_t m = ((int64_t)n + stride - 1) / stride; /* the sample's size */
-  const int64_t need = m - m / (16 * dim);
-  /* the sample's keys, after the histograms */
-  uint64_t *sample = (uint64_t *)(void *)(hall + ((size_t)dim << hb));
-  /* each axis's window [lo, lo + span) of its field: the whole field, then the fewest bins
-   * that hold `need` of the sample, then within those the bins, finer, from the first to the
-   * last that hold any of it */
-  uint64_t lo[3] = {0, 0, 0}, span[3] = {1, 1, 1}, lo0[3] = {0, 0, 0};
-  for (int a = 0; a < dim; a++) span[a] = (uint64_t)1 << wd[a];
-  for (int round = 0; round < 2; round++) {
-    if (round == 1) memcpy(lo0, lo, sizeof lo);
-    int sh[3] = {0, 0, 0};
-    size_t bins[3] = {1, 1, 1};
-    for (int a = 0; a < dim; a++) {
-      const int w = nbs__bits(span[a]);
-      sh[a] = w > hb ? w - hb : 0;
-      bins[a] = (size_t)((span[a] - 1) >> sh[a]) + 1; /* at most 2^hb */
-    }
-    memset(hall, 0, ((size_t)dim << hb) * sizeof *hall);
-    for (int64_t k = 0, s = 0; k < n; k += stride, s++) {
-      uint64_t kk;
-      if (round == 0) {
-        /* the sample's reads are far apart: ask for them ahead */
-        if (k + 16 * (int64_t)stride < n) {
-          __builtin_prefetch(x + (size_t)(k + 16 * (int64_t)stride) * (size_t)dim);
-        }
-        kk = nbs__cs_cellkey(kg, x + (size_t)k * (size_t)dim);
-        sample[s] = kk;
-      } else {
-        kk = sample[s];
-      }
-      for (int a = 0; a < dim; a++) {
-        const uint64_t v = ((kk >> at[a]) & mask[a]) - lo[a];
-        if (v < span[a]) hall[((size_t)a << hb) + (v >> sh[a])]++;
-      }
-    }
-    for (int a = 0; a < dim; a++) {
-      const uint32_t *h = hall + ((size_t)a << hb);
-      /* need, then all of the sample within the window */
-      int64_t want = need;
-      if (round == 1) {
-        want = 0;
-        for (size_t b = 0; b < bins[a]; b++) want += h[b];
-      }
-      size_t b0 = 0, best0 = 0, best = bins[a];
-      int64_t sum = 0;
-      for (size_t b1 = 0; b1 < bins[a]; b1++) {
-        sum += h[b1];
-        while (b0 < b1 && sum - h[b0] >= want) sum -= h[b0++];
-        if (sum >= want && b1 - b0 + 1 < best) {
-          best = b1 - b0 + 1;
-          best0 = b0;
-        }
-      }
-      const uint64_t l = (uint64_t)best0 << sh[a], w = (uint64_t)best << sh[a];
-      lo[a] += l;
-      span[a] = w < span[a] - l ? w : span[a] - l;
-    }
-  }
-  /* the box's sides are powers of two: their room beyond the window, half of it below, as
-   * far as the first round's window (elements beyond the sample's lowest are not left out
-   * for that; those the first round left out stay out) */
-  int cw[3] = {0, 0, 0}, cb = 0;
-  for (int a = 0; a < dim; a++) {
-    cw[a] = nbs__bits(span[a]);
-    const uint64_t below = (((uint64_t)1 << cw[a]) - span[a]) / 2;
-    lo[a] -= below < lo[a] - lo0[a] ? below : lo[a] - lo0[a];
-    cb += cw[a];
-  }
+  uint64_t lo[3];
+  int cw[3];
+  const int cb = nbs__cs_core_box(c, run, kg, bits, lo, cw);
   if (cb + eb > 63) return false;
   /* packed keys: only where the core's keys save two passes or more (the split and the merge
    * cost about what a pass in the cache does) */
@@ -3794,6 +3811,18 @@ typedef struct nbs__cs_dst {
   int S; /* coordinate arrays: dim, + 1 with radii */
 } nbs__cs_dst;
 
+/* The arrays of c a partition writes. */
+static nbs__cs_dst nbs__cs_dst_of(const nbs__cs *c) {
+  nbs__cs_dst d;
+  d.key = c->key;
+  d.a[0] = c->xs;
+  d.a[1] = c->ys;
+  d.a[2] = c->dim == 3 ? c->zs : c->rs;
+  d.a[3] = c->dim == 3 ? c->rs : NULL;
+  d.S = c->dim + (c->rs != NULL ? 1 : 0);
+  return d;
+}
+
 /* Places [from, to) of the line buffers wl (words) and cl (coordinates) to their places in
  * the arrays, one by one: a line not wholly the thread's own. */
 static inline __attribute__((always_inline)) void
@@ -3805,22 +3834,93 @@ nbs__cs_put(const nbs__cs_dst *d, const uint64_t *wl, const double *cl, uint32_t
   }
 }
 
-/* The counts of the keys' top digit (at kshift, dmask) of the elements [f, to), into h. */
+/* The crowded core's box of a partition (nbs__cs_core_part): its corner and the bits of its
+ * sides in each field of the whole key (x sub-cell, iy, iz), and the whole keys of its
+ * lowest and highest corners. */
+typedef struct nbs__cs_corebox {
+  uint64_t lo[3];
+  int cw[3];
+  int pad; /* the relative keys' shift up, so that the partition's top digit is whole */
+  uint64_t wmin, wmax;
+  /* the partition's buckets: the whole key of each one's lowest place (b >= 1), and the
+   * outliers between wmin and wmax counted in the bucket whose keys' range they fall in */
+  const uint64_t *bound;
+  int buckets;
+  uint32_t *between;
+} nbs__cs_corebox;
+
+/* Whether whole key kk (fields at 0, sy, sz) lies in box b; if so *rel is its key relative to
+ * the box's corner, the fields packed in cw's bits (nbs__cs_core_split's words' keys), shifted
+ * up by b->pad. */
+static inline __attribute__((always_inline)) bool
+nbs__cs_in_core(const nbs__cs_corebox *b, int sy, int sz, int dim, uint64_t kk, uint64_t *rel) {
+  const uint64_t ox = (kk & (((uint64_t)1 << sy) - 1)) - b->lo[0];
+  const uint64_t oy = ((kk >> sy) & (((uint64_t)1 << (sz - sy)) - 1)) - b->lo[1];
+  const uint64_t oz = dim == 3 ? (kk >> sz) - b->lo[2] : 0;
+  if ((ox >> b->cw[0]) | (oy >> b->cw[1]) | (oz >> b->cw[2])) return false;
+  *rel = ((oz << b->cw[1] | oy) << b->cw[0] | ox) << b->pad;
+  return true;
+}
+
+/* The whole key of the key rel relative to box b, shifted up by b->pad (the inverse of
+ * nbs__cs_in_core: adding the corner to each field keeps the keys' order). */
+static inline uint64_t nbs__cs_core_whole(const nbs__cs_corebox *b, int sy, int sz, uint64_t rel) {
+  const int c0 = b->cw[0], c01 = b->cw[0] + b->cw[1];
+  rel >>= b->pad;
+  const uint64_t m0 = ((uint64_t)1 << c0) - 1, m1 = ((uint64_t)1 << b->cw[1]) - 1;
+  return ((rel >> c01) + b->lo[2]) << sz | (((rel >> c0) & m1) + b->lo[1]) << sy |
+         ((rel & m0) + b->lo[0]);
+}
+
+/* The counts of the keys' top digit (at kshift, dmask) of the elements [f, to), into h.
+ * With a core box (nbs__cs_core_part; NULL where this is inlined for the whole keys), the
+ * digit of the key relative to it, for the elements in it; the others (outliers) counted in
+ * out[]: those whose keys are below the box's lowest, between its lowest and highest (also
+ * in core->between, by bucket), and above its highest. */
 static inline __attribute__((always_inline)) void
 nbs__cs_part_count(const nbs__cs_keying *kg, const double *restrict x, int dim, int32_t f,
-                   int32_t to, int kshift, uint64_t dmask, uint32_t *restrict h) {
+                   int32_t to, int kshift, uint64_t dmask, uint32_t *restrict h,
+                   const nbs__cs_corebox *core, int32_t out[3]) {
   const nbs__grid g = *kg->g;
   nbs__cs_keying k1 = *kg;
   k1.g = &g;
   k1.dim = dim;
   memset(h, 0, (size_t)(dmask + 1) * sizeof *h);
+  nbs__cs_corebox box;
+  if (core) box = *core;
+  int32_t o[3] = {0, 0, 0};
   for (int32_t k = f; k < to; k++) {
-    h[(nbs__cs_cellkey(&k1, x + (size_t)k * (size_t)dim) >> kshift) & dmask]++;
+    uint64_t kk = nbs__cs_cellkey(&k1, x + (size_t)k * (size_t)dim);
+    if (core && !nbs__cs_in_core(&box, k1.sy, k1.sz, dim, kk, &kk)) {
+      if (kk < box.wmin) {
+        o[0]++;
+      } else if (kk > box.wmax) {
+        o[2]++;
+      } else {
+        /* between: bucket u, the number of buckets past the first whose lowest key is below
+         * it (no core key is equal to it) */
+        int lo_ = 1, hi = box.buckets;
+        while (lo_ < hi) {
+          const int m = lo_ + (hi - lo_) / 2;
+          if (box.bound[m] < kk) lo_ = m + 1;
+          else hi = m;
+        }
+#if defined(_OPENMP)
+#pragma omp atomic
+#endif
+        box.between[lo_ - 1]++;
+        o[1]++;
+      }
+      continue;
+    }
+    h[(kk >> kshift) & dmask]++;
   }
+  if (core) memcpy(out, o, sizeof o);
 }
 
 /* The elements [f, to) to their buckets: element k's word (key << eb | k), coordinates (and
- * radius) to place h[b]++ of the arrays, b its key's top digit. Each bucket gathers a line
+ * radius) to place h[b]++ of the arrays, b its key's top digit (with a core box, the key
+ * relative to it, and the outliers' whole keys and elements to ok[] and oe[] instead). Each bucket gathers a line
  * of each array in the buffer wb (per bucket, a line of 8 entries of its words, then one of
  * each coordinate array) and writes it whole when it is full; start[b] is the bucket's first
  * place of this thread, and a line that holds places of another (its first, and its last)
@@ -3830,7 +3930,8 @@ nbs__cs_part_scatter(const nbs__cs_keying *kg, const double *restrict x,
                      const double *restrict r, int dim, bool radii, int32_t f, int32_t to,
                      int eb, int kshift, uint64_t dmask, uint32_t *restrict h,
                      const uint32_t *restrict start, uint64_t *restrict wb,
-                     const nbs__cs_dst *d) {
+                     const nbs__cs_dst *d, const nbs__cs_corebox *core,
+                     uint64_t *restrict ok, int32_t *restrict oe) {
   const nbs__grid g = *kg->g;
   nbs__cs_keying k1 = *kg;
   k1.g = &g;
@@ -3838,9 +3939,17 @@ nbs__cs_part_scatter(const nbs__cs_keying *kg, const double *restrict x,
   const int S = dim + (radii ? 1 : 0);
   uint64_t *const key = d->key;
   double *const a0 = d->a[0], *const a1 = d->a[1], *const a2 = d->a[2], *const a3 = d->a[3];
+  nbs__cs_corebox box;
+  if (core) box = *core;
+  int32_t o = 0;
   for (int32_t k = f; k < to; k++) {
     const double *xk = x + (size_t)k * (size_t)dim;
-    const uint64_t kk = nbs__cs_cellkey(&k1, xk);
+    uint64_t kk = nbs__cs_cellkey(&k1, xk);
+    if (core && !nbs__cs_in_core(&box, k1.sy, k1.sz, dim, kk, &kk)) {
+      ok[o] = kk; /* an outlier: its whole key and element, in element order */
+      oe[o++] = k;
+      continue;
+    }
     const size_t b = (size_t)((kk >> kshift) & dmask);
     const uint32_t pos = h[b]++;
     const uint32_t s = pos % NBS__CS_LINE;
@@ -3947,13 +4056,7 @@ static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__
   const int dim = c->dim;
   const bool radii = c->rs != NULL;
   const size_t B = dg.buckets;
-  nbs__cs_dst d;
-  d.key = c->key;
-  d.a[0] = c->xs;
-  d.a[1] = c->ys;
-  d.a[2] = dim == 3 ? c->zs : c->rs;
-  d.a[3] = dim == 3 ? c->rs : NULL;
-  d.S = dim + (radii ? 1 : 0);
+  const nbs__cs_dst d = nbs__cs_dst_of(c);
   const size_t wc = B * (size_t)(1 + d.S) * NBS__CS_LINE * sizeof(uint64_t);
   if (!nbs__radix_top_first(n, dg) || (size_t)threads * wc > spare_bytes) return false;
   const int kshift = (dg.passes - 1) * dg.width;
@@ -3975,9 +4078,9 @@ static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__
       if (counted) {
         /* nbs__cellsort_fresh's pass counted them, with this keying and these parts */
       } else if (dim == 3) {
-        nbs__cs_part_count(kg, x, 3, f, to, kshift, dmask, h);
+        nbs__cs_part_count(kg, x, 3, f, to, kshift, dmask, h, NULL, NULL);
       } else {
-        nbs__cs_part_count(kg, x, 2, f, to, kshift, dmask, h);
+        nbs__cs_part_count(kg, x, 2, f, to, kshift, dmask, h, NULL, NULL);
       }
     }
 #if defined(_OPENMP)
@@ -4000,13 +4103,17 @@ static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__
         uint64_t *wb = (uint64_t *)(void *)(spare + (size_t)t * wc);
         const double *r = run->r;
         if (dim == 3 && radii) {
-          nbs__cs_part_scatter(kg, x, r, 3, true, f, to, eb, kshift, dmask, h, start, wb, &d);
+          nbs__cs_part_scatter(kg, x, r, 3, true, f, to, eb, kshift, dmask, h, start, wb, &d,
+                               NULL, NULL, NULL);
         } else if (dim == 3) {
-          nbs__cs_part_scatter(kg, x, r, 3, false, f, to, eb, kshift, dmask, h, start, wb, &d);
+          nbs__cs_part_scatter(kg, x, r, 3, false, f, to, eb, kshift, dmask, h, start, wb, &d,
+                               NULL, NULL, NULL);
         } else if (radii) {
-          nbs__cs_part_scatter(kg, x, r, 2, true, f, to, eb, kshift, dmask, h, start, wb, &d);
+          nbs__cs_part_scatter(kg, x, r, 2, true, f, to, eb, kshift, dmask, h, start, wb, &d,
+                               NULL, NULL, NULL);
         } else {
-          nbs__cs_part_scatter(kg, x, r, 2, false, f, to, eb, kshift, dmask, h, start, wb, &d);
+          nbs__cs_part_scatter(kg, x, r, 2, false, f, to, eb, kshift, dmask, h, start, wb, &d,
+                               NULL, NULL, NULL);
         }
       }
       /* then each part's buckets (those that start in it) are sorted */
@@ -4028,6 +4135,253 @@ static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__
     }
   }
   return fits;
+}
+
+/* An outlier's element in its place of the order while the core's words are being made
+ * (nbs__cs_core_part): marked by the top bit, which no core word has (its key relative to the
+ * core's box and its element take at most 62 bits). */
+#define NBS__CS_OUTLIER ((uint64_t)1 << 63)
+
+/* Place p of the order, a core word (the key relative to box b, shifted up by b->pad, << eb |
+ * element) or an outlier's marked element, in the whole grid's terms: the whole key (the
+ * outlier's computed again, as the count computed it) << eb | element where the keys are
+ * packed; else the key, and the element to idx[]. */
+static inline __attribute__((always_inline)) void
+nbs__cs_core_back(const nbs__cs *c, const nbs__run *run, const nbs__cs_corebox *b,
+                  const nbs__cs_keying *kg, int eb, int32_t p) {
+  const uint64_t w = c->key[p], e = w & (((uint64_t)1 << eb) - 1);
+  const uint64_t whole = w & NBS__CS_OUTLIER
+                             ? nbs__cs_cellkey(kg, run->x + (size_t)e * (size_t)c->dim)
+                             : nbs__cs_core_whole(b, kg->sy, kg->sz, w >> eb);
+  if (c->idx) {
+    c->key[p] = whole;
+    c->idx[p] = (int32_t)e;
+  } else {
+    c->key[p] = whole << eb | e;
+  }
+}
+
+/* The outliers of a bucket whose keys fall in its range (u of them, their elements oe[], in
+ * order), merged into its core words [s0, s0 + len), in order, from the end, in the cache:
+ * outlier j goes after the core words whose whole keys are below its own (found by galloping
+ * down), and the run of core words between it and outlier j + 1 moves up by j + 1 places with
+ * their coordinates (nbs__cs_shift); the outlier's place takes its marked element and its
+ * coordinates (and radius) from the input. */
+static void nbs__cs_core_merge(const nbs__cs *c, const nbs__run *run, const nbs__cs_corebox *b,
+                               const nbs__cs_keying *kg, int eb, int32_t s0, int32_t len,
+                               const int32_t *oe, int32_t u) {
+  const uint64_t *w = c->key + s0;
+  int32_t r = len;
+  for (int32_t j = u - 1; j >= 0; j--) {
+    const int32_t e = oe[j];
+    const uint64_t o = nbs__cs_cellkey(kg, run->x + (size_t)e * (size_t)c->dim);
+    int32_t lo_;
+#define NBS__CS_BELOW(i) (nbs__cs_core_whole(b, kg->sy, kg->sz, w[i] >> eb) < o)
+    NBS__CS_GALLOP(lo_, 0, r, NBS__CS_BELOW);
+#undef NBS__CS_BELOW
+    if (r > lo_) nbs__cs_shift(c, s0 + lo_, s0 + r, j + 1);
+    c->key[s0 + lo_ + j] = NBS__CS_OUTLIER | (uint64_t)e;
+    nbs__cs_take(c, run, s0 + lo_ + j, e);
+    r = lo_;
+  }
+}
+
+/* Steps 1-3 at once for the keys nbs__cs_core sorts by their crowded core (a few elements far
+ * out stretch the grid until its keys need 60 bits, unpacked: the sparse and clustered scenes
+ * of the benchmarks), where the context has timed the partition faster than the sort and the
+ * gather (nbs__cs_way): nbs__cs_partition's partition of the core's elements, by their keys
+ * relative to the core's box, with the outliers put in their places apart.
+ *   a. the core's box, from a sample (nbs__cs_core_box); the relative keys shifted up so that
+ *      the top digit is whole (29 bits in 4 digits of 8: a top digit of 5 bits made 32
+ *      buckets, too large for the cache; 2D sparse, N = 1e6); the whole key of each bucket's
+ *      lowest place;
+ *   b. a pass over the input (nbs__cs_part_count): the core keys' top digits counted, and
+ *      the outliers, by whether their keys are below the box's lowest (they come before every
+ *      core element in the order), above its highest (after every one), or between (a side of
+ *      the box cuts a layer of cells: they come among the core's elements of one bucket, that
+ *      whose range holds the key, and are counted in it);
+ *   c. the places: the outliers below first, then each bucket's core elements and the
+ *      outliers between in its range, then the outliers above. Each core element's word (its
+ *      relative key << eb | element) and coordinates to its bucket, in whole lines, each
+ *      outlier's whole key and element to a list (nbs__cs_part_scatter);
+ *   d. the outliers sorted by (key, element) (a plain LSD sort: they are few); those below
+ *      and above to their places, marked (NBS__CS_OUTLIER), with their coordinates;
+ *   e. each bucket put in order in the cache (nbs__cs_part_bucket), and its outliers between
+ *      merged into it there (nbs__cs_core_merge);
+ *   f. each place put in the whole grid's terms (nbs__cs_core_back), one pass in order.
+ * The result is that of the sort by the whole key and the gather, byte for byte: the
+ * partition, the buckets' sorts and the outliers' sort are stable, and no core element shares
+ * a key with an outlier. Where the sort and the gather read each element's coordinates at
+ * random (on the Intel guest, 20 ns each at N = 1e6 in 3D: bench/floor.c), this reads the
+ * input in order, twice.
+ * Memory: none beyond the work block. spare (the idx array, which unpacked keys fill only in
+ * f.) holds the scatter's line buffers, then the buckets' scratch, and at its end the
+ * outliers' list and its sort's copy (24 bytes per outlier). Returns false, having written
+ * nothing the caller needs, where nbs__cs_core would not sort by the core (the core's keys
+ * would not fit a word with the element and the mark), where packed whole keys would take no
+ * more digits than the core's (the huge domain, whose core is all of it: nbs__cs_partition
+ * does as well), where the partition would not (too few elements for the digits, a bucket too
+ * large for the cache), or where the buffers and the outliers' list do not fit spare. */
+static bool nbs__cs_core_part(const nbs__cs *c, const nbs__run *run, const nbs__cs_keying *kg,
+                              int eb, int bits, uint32_t *hist, int threads, char *spare,
+                              size_t spare_bytes) {
+  const int32_t n = c->n;
+  const int dim = c->dim;
+  const bool radii = c->rs != NULL;
+  const double *x = run->x;
+  /* a */
+  nbs__cs_corebox box;
+  const int cb = nbs__cs_core_box(c, run, kg, bits, box.lo, box.cw);
+  if (cb + eb > 63) return false;
+  const nbs__digits dg = nbs__radix_digits(cb);
+  if (!c->idx && dg.passes >= nbs__radix_digits(bits).passes) return false;
+  if (!nbs__radix_top_first(n, dg)) return false;
+  box.pad = dg.passes * dg.width - cb;
+  if (cb + box.pad + eb > 62) return false;
+  box.wmin = nbs__cs_core_whole(&box, kg->sy, kg->sz, 0);
+  box.wmax = nbs__cs_core_whole(&box, kg->sy, kg->sz, (((uint64_t)1 << cb) - 1) << box.pad);
+  const size_t B = dg.buckets;
+  const int kshift = (dg.passes - 1) * dg.width;
+  const uint64_t dmask = B - 1;
+  uint64_t bound[(size_t)1 << NBS__RADIX_BITS];
+  uint32_t between[(size_t)1 << NBS__RADIX_BITS], mfrom[((size_t)1 << NBS__RADIX_BITS) + 1];
+  for (size_t b = 0; b < B; b++) {
+    bound[b] = nbs__cs_core_whole(&box, kg->sy, kg->sz, (uint64_t)b << kshift);
+    between[b] = 0;
+  }
+  box.bound = bound;
+  box.buckets = (int)B;
+  box.between = between;
+  const nbs__cs_dst d = nbs__cs_dst_of(c);
+  const size_t wc = B * (size_t)(1 + d.S) * NBS__CS_LINE * sizeof(uint64_t);
+  uint32_t top[((size_t)1 << NBS__RADIX_BITS) + 1];
+  int32_t out[NBS__THREADS_MAX][3], ofrom[NBS__THREADS_MAX + 1];
+  int32_t below = 0, mid = 0, above = 0;
+  uint32_t most = 0;
+  size_t per = 0;
+  bool fits = true;
+  uint64_t *ok = NULL;
+  int32_t *oe = NULL, *se = NULL;
+#if defined(_OPENMP)
+#pragma omp parallel num_threads(threads) if (threads > 1)
+#endif
+  {
+    /* b */
+    NBS__PARTS(t, threads) {
+      const int32_t f = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
+      uint32_t *h = hist + (size_t)t * B;
+      if (dim == 3) {
+        nbs__cs_part_count(kg, x, 3, f, to, kshift, dmask, h, &box, out[t]);
+      } else {
+        nbs__cs_part_count(kg, x, 2, f, to, kshift, dmask, h, &box, out[t]);
+      }
+    }
+#if defined(_OPENMP)
+#pragma omp barrier
+#pragma omp single
+#endif
+    {
+      /* c. the places */
+      ofrom[0] = 0;
+      for (int t = 0; t < threads; t++) {
+        below += out[t][0];
+        mid += out[t][1];
+        above += out[t][2];
+        ofrom[t + 1] = ofrom[t] + out[t][0] + out[t][1] + out[t][2];
+      }
+      most = nbs__radix_offsets(hist, B, threads, top);
+      uint32_t add = (uint32_t)below;
+      mfrom[0] = 0;
+      for (size_t b = 0; b < B; b++) {
+        for (int t = 0; t < threads; t++) hist[(size_t)t * B + b] += add;
+        top[b] += add;
+        add += between[b];
+        mfrom[b + 1] = mfrom[b] + between[b];
+      }
+      top[B] += add;
+      per = ((size_t)most * 16 + 63) & ~(size_t)63;
+      /* the outliers' list at spare's end: keys and elements, then the sort's copy */
+      const size_t no = (size_t)ofrom[threads], list = no * 24 + 64;
+      const size_t R = list <= spare_bytes ? (spare_bytes - list) & ~(size_t)63 : 0;
+      fits = list <= spare_bytes && most <= NBS__RADIX_LOCAL_MAX &&
+             (size_t)threads * wc <= R && (size_t)threads * per <= R;
+      ok = (uint64_t *)(void *)(spare + R);
+      oe = (int32_t *)(void *)(ok + no);
+    }
+    if (fits) {
+      NBS__PARTS(t, threads) {
+        const int32_t f = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
+        uint32_t *h = hist + (size_t)t * B;
+        uint32_t start[(size_t)1 << NBS__RADIX_BITS];
+        memcpy(start, h, B * sizeof *h);
+        uint64_t *wb = (uint64_t *)(void *)(spare + (size_t)t * wc);
+        const double *r = run->r;
+        uint64_t *tk = ok + ofrom[t];
+        int32_t *te = oe + ofrom[t];
+        if (dim == 3 && radii) {
+          nbs__cs_part_scatter(kg, x, r, 3, true, f, to, eb, kshift, dmask, h, start, wb, &d,
+                               &box, tk, te);
+        } else if (dim == 3) {
+          nbs__cs_part_scatter(kg, x, r, 3, false, f, to, eb, kshift, dmask, h, start, wb, &d,
+                               &box, tk, te);
+        } else if (radii) {
+          nbs__cs_part_scatter(kg, x, r, 2, true, f, to, eb, kshift, dmask, h, start, wb, &d,
+                               &box, tk, te);
+        } else {
+          nbs__cs_part_scatter(kg, x, r, 2, false, f, to, eb, kshift, dmask, h, start, wb, &d,
+                               &box, tk, te);
+        }
+      }
+#if defined(_OPENMP)
+#pragma omp barrier
+#pragma omp single
+#endif
+      {
+        /* d */
+        const int32_t no = below + mid + above;
+        uint64_t *sk = (uint64_t *)(void *)(oe + no + (no & 1));
+        se = (int32_t *)(void *)(sk + no);
+        if (no > 0) {
+          nbs__radix(ok, oe, sk, se, sk, se, no, 0, nbs__radix_digits(bits), hist, 1, false,
+                     NULL, 0);
+        }
+        for (int32_t j = 0; j < below; j++) {
+          c->key[j] = NBS__CS_OUTLIER | (uint64_t)se[j];
+          nbs__cs_take(c, run, j, se[j]);
+        }
+        for (int32_t j = 0; j < above; j++) {
+          const int32_t p = n - above + j, e = se[below + mid + j];
+          c->key[p] = NBS__CS_OUTLIER | (uint64_t)e;
+          nbs__cs_take(c, run, p, e);
+        }
+      }
+      /* e */
+      NBS__PARTS(t, threads) {
+        const uint32_t from = (uint32_t)nbs__chunk(n, t, threads);
+        const uint32_t end = (uint32_t)nbs__chunk(n, t + 1, threads);
+        uint32_t *h = hist + (size_t)t * B;
+        uint64_t *other = (uint64_t *)(void *)(spare + (size_t)t * per);
+        int32_t *gid = (int32_t *)(void *)(other + most), *rank = gid + most;
+        for (size_t b = 0; b < B; b++) {
+          if (top[b] < from || top[b] >= end || top[b + 1] == top[b]) continue;
+          const int32_t len = (int32_t)(top[b + 1] - top[b] - between[b]);
+          if (len > 0) nbs__cs_part_bucket(&d, top[b], len, eb, dg, h, other, gid, rank);
+          if (between[b] > 0) {
+            nbs__cs_core_merge(c, run, &box, kg, eb, (int32_t)top[b], len,
+                               se + below + mfrom[b], (int32_t)between[b]);
+          }
+        }
+      }
+    }
+  }
+  if (!fits) return false;
+  /* f */
+#if defined(_OPENMP)
+#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
+#endif
+  for (int32_t p = 0; p < n; p++) nbs__cs_core_back(c, run, &box, kg, eb, p);
+  run->ctx->cs_outliers = below + mid + above;
+  return true;
 }
 
 /* Where step 1 (the keys in element order) puts them, for a sort of `bits` key bits: the
@@ -4060,18 +4414,26 @@ static void nbs__cs_sort_gather(const nbs__cs *c, nbs__run *run, const nbs__cs_k
   int32_t *i0 = odd ? ti : c->idx, *i1 = odd ? c->idx : ti;
   /* 1-3 at once, where the input is larger than 1 GiB, or the context has measured the
    * partition faster (nbs__cs_way) */
-  const bool part = packed && nbs__cs_way(run, threads) == 2;
-  const bool counted = part && run->precounts && eb == run->pre_eb && bits == run->pre_bits &&
-                       nbs__cs_kept_same(&run->pre, kg);
-  run->ctx->cs_partitioned =
-      part && nbs__cs_partition(c, run, kg, eb, dg, hist, counted, threads, spare, spare_bytes);
-  if (run->ctx->cs_partitioned) run->ctx->cs_fresh_words = counted;
-  if (run->cs_try) run->cs_tried = (int8_t)(run->ctx->cs_partitioned ? 2 : part ? 3 : 1);
-  if (run->ctx->cs_partitioned) return;
   /* 1-2 by the crowded core's keys, where they fit a word with the element and the whole
    * keys do not, or where the whole keys do but take four passes or more and the core's two
-   * fewer (not where nbs__cellsort_fresh has made the words already); else: */
+   * fewer (not where nbs__cellsort_fresh has made the words already) */
   const bool core = !packed || (!words && dg.passes >= 4);
+  const bool part = nbs__cs_way(run, threads) == 2;
+  /* 1-3 at once, where the context has measured the partition faster (nbs__cs_way): by the
+   * crowded core's keys, or by the whole keys (where they are packed, and also where the
+   * input is larger than 1 GiB) */
+  bool parted = part && core &&
+                nbs__cs_core_part(c, run, kg, eb, bits, hist, threads, spare, spare_bytes);
+  const bool counted = part && !parted && run->precounts && eb == run->pre_eb &&
+                       bits == run->pre_bits && nbs__cs_kept_same(&run->pre, kg);
+  if (part && !parted && packed) {
+    parted = nbs__cs_partition(c, run, kg, eb, dg, hist, counted, threads, spare, spare_bytes);
+    if (parted) run->ctx->cs_fresh_words = counted;
+  }
+  run->ctx->cs_partitioned = parted;
+  if (run->cs_try) run->cs_tried = (int8_t)(parted ? 2 : part ? 3 : 1);
+  if (parted) return;
+  /* else: */
   if (!core || !nbs__cs_core(c, run, kg, eb, bits, hist, threads)) {
     /* 1. keys (the grid in locals; with the small inputs' gather's locals below, 3D N = 1e6
      * 33.8 -> 33.5 ns per element, 1e4 23.2 -> 23.0-23.2, 2D 1e4 11.8 -> 11.4, interleaved,

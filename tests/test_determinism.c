@@ -502,6 +502,104 @@ static void test_partition(void) {
   }
 }
 
+/* The partition by the crowded core (nbs__cs_core_part): where a few elements far out
+ * stretch the grid, so that cellsort sorts by the keys of the crowded core's box and puts the
+ * outliers in their places apart, NBS_PARTITION=always partitions the core's elements by
+ * their keys relative to the box and must give the bytes of NBS_PARTITION=never (the sort by
+ * the core, then the gather), in both modes, for 1, 2 and 3 threads. The scenes: 60000
+ * elements uniform in a box (3D, whose whole keys then take 64 bits, unpacked; 2D, whose 43
+ * bits share a word with the element), with and without radii, and outliers of each kind:
+ * below the box's lowest key (a million diameters down the key's last axis), above its
+ * highest, between (within the box's range on the last axis, a million diameters out on
+ * another: they fall among the core's elements of one bucket, and are merged into it), in
+ * small groups that touch each other, and a halo touching the box's side (its elements in or
+ * out of the box as the sample puts it); and four scenes whose outliers are placed at random
+ * (an axis, a side, 10^3 to 10^6 diameters out, some in touching pairs). It fails when an
+ * outlier of any kind is put in the
+ * wrong place or with the wrong coordinates, when a bucket's range is off by one place, or
+ * when the partition does not run (ctx->cs_partitioned) or finds no outliers. */
+static void test_core_partition(void) {
+  const int counts[] = {1, 2, 3};
+  for (int sc = 0; sc < 8; sc++) {
+    const int dim = 2 + sc % 2;
+    const double box = dim == 3 ? 40.0 : 250.0, far = 1e6;
+    scene s = det_scene(sc % 4 < 2 ? DET_UNIFORM : DET_RADII, dim, 60000, box, 0.0, 41 + sc);
+    int64_t outliers = 0;
+    uint64_t rng = 71 + (uint64_t)sc;
+    for (int64_t k = 0; k < s.n; k++) {
+      double *p = s.coords + k * dim;
+      if (sc >= 4) {
+        /* at random: 1 in 120 out on a random axis, up or down, 10^3 to 10^6 diameters,
+         * some of them in pairs */
+        if (det_uniform(&rng) < 1.0 / 120.0) {
+          const int a = (int)(det_uniform(&rng) * dim) % dim;
+          const double d = pow(10.0, 3.0 + 3.0 * det_uniform(&rng));
+          p[a] = det_uniform(&rng) < 0.5 ? -d : box + d;
+          if (k + 1 < s.n && det_uniform(&rng) < 0.3) {
+            double *q = p + dim; /* the next one touching it */
+            for (int b = 0; b < dim; b++) q[b] = p[b] + (b == 0 ? 0.7 : 0.0);
+            k++;
+            outliers++;
+          }
+          outliers++;
+        }
+        continue;
+      }
+      const double g = (double)(k % 5) * 0.6; /* five to a group, touching */
+      const int last = dim - 1;               /* the key's last axis (the longest first) */
+      if (k % 193 == 0) {
+        p[last] = -far + g; /* below */
+      } else if (k % 197 == 0) {
+        p[last] = far + g; /* above */
+      } else if (k % 211 == 0) {
+        p[0] = far + g; /* between: the last axis within the box */
+      } else if (k % 223 == 0) {
+        p[0] = -far - g;
+      } else if (dim == 3 && k % 227 == 0) {
+        p[1] = far + g;
+      } else if (k % 53 == 0) {
+        p[0] = box + 0.45 * (double)(k % 7); /* the halo */
+        continue;
+      } else {
+        continue;
+      }
+      outliers++;
+    }
+    for (size_t t = 0; t < sizeof counts / sizeof *counts; t++) {
+      for (int mode = 0; mode < 2; mode++) {
+        nbs_context_def cdef = nbs_default_context_def();
+        cdef.threads = counts[t];
+        nbs_context *part, *sort;
+        ASSERT_TRUE(setenv("NBS_PARTITION", "always", 1) == 0);
+        nbs_status st = nbs_context_create(&cdef, &part);
+        ASSERT_TRUE(setenv("NBS_PARTITION", "never", 1) == 0);
+        nbs_status st2 = nbs_context_create(&cdef, &sort);
+        unsetenv("NBS_PARTITION");
+        ASSERT_OK(st);
+        ASSERT_OK(st2);
+        pair_list a, b;
+        ASSERT_OK(detect_raw(part, &s, NBS_CELLSORT, (nbs_mode)mode, &a));
+        CHECK_MSG(part->cs_partitioned, "scene %d (%dD), %d threads: the partition did not run",
+                  sc, dim, counts[t]);
+        CHECK_MSG(part->cs_outliers >= outliers, "scene %d: %lld outliers, %lld far out", sc,
+                  (long long)part->cs_outliers, (long long)outliers);
+        ASSERT_OK(detect_raw(sort, &s, NBS_CELLSORT, (nbs_mode)mode, &b));
+        CHECK_MSG(!sort->cs_partitioned, "scene %d: NBS_PARTITION=never partitioned", sc);
+        CHECK_MSG(sort->cs_outliers == part->cs_outliers, "scene %d: %lld outliers, the sort "
+                  "%lld", sc, (long long)part->cs_outliers, (long long)sort->cs_outliers);
+        CHECK_MSG(a.count > (size_t)s.n / 4, "scene %d: only %zu pairs", sc, a.count);
+        CHECK_MSG(same_bytes(&a, &b), "scene %d (%dD) mode %d, %d threads: the core's "
+                  "partition differs from the sort", sc, dim, mode, counts[t]);
+        pair_list_free(&a);
+        pair_list_free(&b);
+        nbs_context_destroy(part);
+        nbs_context_destroy(sort);
+      }
+    }
+    scene_free(&s);
+  }
+}
+
 /* ctx detects s with cellsort from scratch (fresh) or from the last order, into *out. */
 static void tuned_detect(nbs_context *ctx, const scene *s, bool fresh, pair_list *out) {
   nbs_input in = scene_input(s);
@@ -1565,6 +1663,7 @@ int main(int argc, char **argv) {
       {"thread_counts", test_thread_counts},
       {"caller_threads", test_caller_threads},
       {"partition", test_partition},
+      {"core_partition", test_core_partition},
       {"tuned_way", test_tuned_way},
       {"kernels", test_kernels},
       {"time_steps", test_time_steps},
