@@ -3430,6 +3430,49 @@ nbs__cs_core_split(const nbs__cs_keying *kg, const double *restrict x, int dim, 
 }
 
 #if NBS__CS_AVX512
+/* The crowded core's box (corner lo, sides of cw bits in each field of the whole key) in
+ * AVX-512 registers, for 8 keys at a time: nbs__cs_core8_in. */
+typedef struct nbs__cs_core8 {
+  __m512i mx, my, l0, l1, l2, s0, s1, s2;
+  __m128i shy, shz, sc0, sc1;
+} nbs__cs_core8;
+
+static inline __attribute__((always_inline)) NBS__CS_AVX512_TARGET void
+nbs__cs_core8_init(nbs__cs_core8 *b, const nbs__cs_keying *kg, const uint64_t lo[3],
+                  const int cw[3]) {
+  const int sy = kg->sy, sz = kg->sz;
+  b->mx = _mm512_set1_epi64((int64_t)(((uint64_t)1 << sy) - 1));
+  b->my = _mm512_set1_epi64((int64_t)(((uint64_t)1 << (sz - sy)) - 1));
+  b->l0 = _mm512_set1_epi64((int64_t)lo[0]);
+  b->l1 = _mm512_set1_epi64((int64_t)lo[1]);
+  b->l2 = _mm512_set1_epi64((int64_t)lo[2]);
+  b->s0 = _mm512_set1_epi64((int64_t)((uint64_t)1 << cw[0]));
+  b->s1 = _mm512_set1_epi64((int64_t)((uint64_t)1 << cw[1]));
+  b->s2 = _mm512_set1_epi64((int64_t)((uint64_t)1 << cw[2]));
+  b->shy = _mm_cvtsi32_si128(sy);
+  b->shz = _mm_cvtsi32_si128(sz);
+  b->sc0 = _mm_cvtsi32_si128(cw[0]);
+  b->sc1 = _mm_cvtsi32_si128(cw[1]);
+}
+
+/* Which of the 8 whole keys kk lie in the box (the mask), and each one's key relative to the
+ * box's corner (*rel; the lanes outside it hold no key). */
+static inline __attribute__((always_inline)) NBS__CS_AVX512_TARGET __mmask8
+nbs__cs_core8_in(const nbs__cs_core8 *b, __m512i kk, int dim, __m512i *rel) {
+  const __m512i ox = _mm512_sub_epi64(_mm512_and_si512(kk, b->mx), b->l0);
+  const __m512i oy =
+      _mm512_sub_epi64(_mm512_and_si512(_mm512_srl_epi64(kk, b->shy), b->my), b->l1);
+  __mmask8 in = _mm512_cmplt_epu64_mask(ox, b->s0) & _mm512_cmplt_epu64_mask(oy, b->s1);
+  __m512i w = oy;
+  if (dim == 3) {
+    const __m512i oz = _mm512_sub_epi64(_mm512_srl_epi64(kk, b->shz), b->l2);
+    in &= _mm512_cmplt_epu64_mask(oz, b->s2);
+    w = _mm512_or_si512(_mm512_sll_epi64(oz, b->sc1), oy);
+  }
+  *rel = _mm512_or_si512(_mm512_sll_epi64(w, b->sc0), ox);
+  return in;
+}
+
 /* nbs__cs_core_split 8 elements at a time (AVX-512: F, DQ, VL), the keys as nbs__cs_key8_of
  * computes them (the same keys bit for bit): each lane's offsets from the core box's corner
  * compared with its sides at once, and the lanes in the box and the others each packed by a
@@ -3446,16 +3489,8 @@ nbs__cs_core_split512_body(const nbs__cs_keying *kg, const double *restrict x, i
                            int32_t *n_core, int32_t *n_out) {
   nbs__cs_keys8 v;
   nbs__cs_keys8_init(&v, kg);
-  const int sy = kg->sy, sz = kg->sz;
-  const __m512i mx = _mm512_set1_epi64((int64_t)(((uint64_t)1 << sy) - 1));
-  const __m512i my = _mm512_set1_epi64((int64_t)(((uint64_t)1 << (sz - sy)) - 1));
-  const __m512i l0 = _mm512_set1_epi64((int64_t)lo[0]), l1 = _mm512_set1_epi64((int64_t)lo[1]);
-  const __m512i l2 = _mm512_set1_epi64((int64_t)lo[2]);
-  const __m512i s0 = _mm512_set1_epi64((int64_t)((uint64_t)1 << cw[0]));
-  const __m512i s1 = _mm512_set1_epi64((int64_t)((uint64_t)1 << cw[1]));
-  const __m512i s2 = _mm512_set1_epi64((int64_t)((uint64_t)1 << cw[2]));
-  const __m128i shy = _mm_cvtsi32_si128(sy), shz = _mm_cvtsi32_si128(sz);
-  const __m128i sc0 = _mm_cvtsi32_si128(cw[0]), sc1 = _mm_cvtsi32_si128(cw[1]);
+  nbs__cs_core8 bx;
+  nbs__cs_core8_init(&bx, kg, lo, cw);
   const __m128i seb = _mm_cvtsi32_si128(eb);
   const __m512i eight = _mm512_set1_epi64(8);
   __m512i es = _mm512_add_epi64(_mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0), _mm512_set1_epi64(f));
@@ -3464,16 +3499,9 @@ nbs__cs_core_split512_body(const nbs__cs_keying *kg, const double *restrict x, i
     __m512d c[3], t[3];
     nbs__cs_pos8(&v, x + (size_t)e * (size_t)dim, dim, c, t);
     const __m512i kk = nbs__cs_key8_of(&v, t, dim);
-    const __m512i ox = _mm512_sub_epi64(_mm512_and_si512(kk, mx), l0);
-    const __m512i oy = _mm512_sub_epi64(_mm512_and_si512(_mm512_srl_epi64(kk, shy), my), l1);
-    __mmask8 in = _mm512_cmplt_epu64_mask(ox, s0) & _mm512_cmplt_epu64_mask(oy, s1);
-    __m512i w = oy;
-    if (dim == 3) {
-      const __m512i oz = _mm512_sub_epi64(_mm512_srl_epi64(kk, shz), l2);
-      in &= _mm512_cmplt_epu64_mask(oz, s2);
-      w = _mm512_or_si512(_mm512_sll_epi64(oz, sc1), oy);
-    }
-    w = _mm512_or_si512(_mm512_sll_epi64(_mm512_or_si512(_mm512_sll_epi64(w, sc0), ox), seb), es);
+    __m512i w;
+    const __mmask8 in = nbs__cs_core8_in(&bx, kk, dim, &w);
+    w = _mm512_or_si512(_mm512_sll_epi64(w, seb), es);
     _mm512_storeu_si512((void *)(A + cc), _mm512_maskz_compress_epi64(in, w));
     cc += __builtin_popcount(in);
     const __mmask8 out = (__mmask8)~in;
@@ -3938,17 +3966,8 @@ nbs__cs_core_count512_body(const nbs__cs_keying *kg, const double *restrict x, i
   nbs__cs_keys8 v;
   nbs__cs_keys8_init(&v, kg);
   const nbs__cs_corebox box = *core;
-  const int sy = kg->sy, sz = kg->sz;
-  const __m512i mx = _mm512_set1_epi64((int64_t)(((uint64_t)1 << sy) - 1));
-  const __m512i my = _mm512_set1_epi64((int64_t)(((uint64_t)1 << (sz - sy)) - 1));
-  const __m512i l0 = _mm512_set1_epi64((int64_t)box.lo[0]);
-  const __m512i l1 = _mm512_set1_epi64((int64_t)box.lo[1]);
-  const __m512i l2 = _mm512_set1_epi64((int64_t)box.lo[2]);
-  const __m512i s0 = _mm512_set1_epi64((int64_t)((uint64_t)1 << box.cw[0]));
-  const __m512i s1 = _mm512_set1_epi64((int64_t)((uint64_t)1 << box.cw[1]));
-  const __m512i s2 = _mm512_set1_epi64((int64_t)((uint64_t)1 << box.cw[2]));
-  const __m128i shy = _mm_cvtsi32_si128(sy), shz = _mm_cvtsi32_si128(sz);
-  const __m128i sc0 = _mm_cvtsi32_si128(box.cw[0]), sc1 = _mm_cvtsi32_si128(box.cw[1]);
+  nbs__cs_core8 bx;
+  nbs__cs_core8_init(&bx, kg, box.lo, box.cw);
   const __m128i sdig = _mm_cvtsi32_si128(kshift - box.pad);
   const __m512i dm = _mm512_set1_epi64((int64_t)dmask);
   memset(h, 0, (size_t)(dmask + 1) * sizeof *h);
@@ -3958,17 +3977,9 @@ nbs__cs_core_count512_body(const nbs__cs_keying *kg, const double *restrict x, i
     __m512d c[3], t[3];
     nbs__cs_pos8(&v, x + (size_t)e * (size_t)dim, dim, c, t);
     const __m512i kk = nbs__cs_key8_of(&v, t, dim);
-    const __m512i ox = _mm512_sub_epi64(_mm512_and_si512(kk, mx), l0);
-    const __m512i oy = _mm512_sub_epi64(_mm512_and_si512(_mm512_srl_epi64(kk, shy), my), l1);
-    __mmask8 in = _mm512_cmplt_epu64_mask(ox, s0) & _mm512_cmplt_epu64_mask(oy, s1);
-    __m512i w = oy;
-    if (dim == 3) {
-      const __m512i oz = _mm512_sub_epi64(_mm512_srl_epi64(kk, shz), l2);
-      in &= _mm512_cmplt_epu64_mask(oz, s2);
-      w = _mm512_or_si512(_mm512_sll_epi64(oz, sc1), oy);
-    }
     /* the digit of (relative key << pad) at kshift: the relative key's at kshift - pad */
-    w = _mm512_or_si512(_mm512_sll_epi64(w, sc0), ox);
+    __m512i w;
+    const __mmask8 in = nbs__cs_core8_in(&bx, kk, dim, &w);
     uint64_t dg[8];
     _mm512_storeu_si512((void *)dg, _mm512_and_si512(_mm512_srl_epi64(w, sdig), dm));
     if (in == 0xff) {
@@ -4094,8 +4105,9 @@ nbs__cs_part_scatter(const nbs__cs_keying *kg, const double *restrict x,
 }
 
 #if NBS__CS_AVX512
-/* nbs__cs_part_scatter 8 elements at a time (AVX-512): the keys as nbs__cs_key8_of computes
- * them (the same bit for bit), with a core box the relative keys and which lanes are in it,
+/* nbs__cs_part_scatter with a core box (not NULL), 8 elements at a time (AVX-512): the keys
+ * as nbs__cs_key8_of computes them (the same bit for bit), the relative keys and which lanes
+ * are in the box (nbs__cs_core8_in),
  * the words and digits of the 8 at once; each lane then to its bucket's line buffers
  * (nbs__cs_part_put), an outlier to the list, in element order; the last few elements, and
  * the buckets' last lines, by the scalar loop. Against the scalar loop (3D sparse, N = 1e6,
@@ -4111,25 +4123,10 @@ nbs__cs_part_scatter512_body(const nbs__cs_keying *kg, const double *restrict x,
                              int32_t *restrict oe) {
   nbs__cs_keys8 v;
   nbs__cs_keys8_init(&v, kg);
-  nbs__cs_corebox box;
-  if (core) box = *core;
-  const int sy = kg->sy, sz = kg->sz;
-  const __m512i mx = _mm512_set1_epi64((int64_t)(((uint64_t)1 << sy) - 1));
-  const __m512i my = _mm512_set1_epi64((int64_t)(((uint64_t)1 << (sz - sy)) - 1));
-  __m512i l0 = mx, l1 = mx, l2 = mx, s0 = mx, s1 = mx, s2 = mx;
-  __m128i sc0 = _mm_setzero_si128(), sc1 = sc0, spad = sc0;
-  if (core) {
-    l0 = _mm512_set1_epi64((int64_t)box.lo[0]);
-    l1 = _mm512_set1_epi64((int64_t)box.lo[1]);
-    l2 = _mm512_set1_epi64((int64_t)box.lo[2]);
-    s0 = _mm512_set1_epi64((int64_t)((uint64_t)1 << box.cw[0]));
-    s1 = _mm512_set1_epi64((int64_t)((uint64_t)1 << box.cw[1]));
-    s2 = _mm512_set1_epi64((int64_t)((uint64_t)1 << box.cw[2]));
-    sc0 = _mm_cvtsi32_si128(box.cw[0]);
-    sc1 = _mm_cvtsi32_si128(box.cw[1]);
-    spad = _mm_cvtsi32_si128(box.pad);
-  }
-  const __m128i shy = _mm_cvtsi32_si128(sy), shz = _mm_cvtsi32_si128(sz);
+  const nbs__cs_corebox box = *core;
+  nbs__cs_core8 bx;
+  nbs__cs_core8_init(&bx, kg, box.lo, box.cw);
+  const __m128i spad = _mm_cvtsi32_si128(box.pad);
   const __m128i seb = _mm_cvtsi32_si128(eb), sdig = _mm_cvtsi32_si128(kshift);
   const __m512i dm = _mm512_set1_epi64((int64_t)dmask), eight = _mm512_set1_epi64(8);
   __m512i es = _mm512_add_epi64(_mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0), _mm512_set1_epi64(f));
@@ -4137,29 +4134,19 @@ nbs__cs_part_scatter512_body(const nbs__cs_keying *kg, const double *restrict x,
   for (; to - e >= 8; e += 8) {
     __m512d c[3], t[3];
     nbs__cs_pos8(&v, x + (size_t)e * (size_t)dim, dim, c, t);
-    __m512i kk = nbs__cs_key8_of(&v, t, dim);
-    __mmask8 in = 0xff;
+    const __m512i kk = nbs__cs_key8_of(&v, t, dim);
     uint64_t kl[8];
-    if (core) {
-      _mm512_storeu_si512((void *)kl, kk);
-      const __m512i ox = _mm512_sub_epi64(_mm512_and_si512(kk, mx), l0);
-      const __m512i oy = _mm512_sub_epi64(_mm512_and_si512(_mm512_srl_epi64(kk, shy), my), l1);
-      in = _mm512_cmplt_epu64_mask(ox, s0) & _mm512_cmplt_epu64_mask(oy, s1);
-      __m512i w = oy;
-      if (dim == 3) {
-        const __m512i oz = _mm512_sub_epi64(_mm512_srl_epi64(kk, shz), l2);
-        in &= _mm512_cmplt_epu64_mask(oz, s2);
-        w = _mm512_or_si512(_mm512_sll_epi64(oz, sc1), oy);
-      }
-      kk = _mm512_sll_epi64(_mm512_or_si512(_mm512_sll_epi64(w, sc0), ox), spad);
-    }
+    _mm512_storeu_si512((void *)kl, kk);
+    __m512i rel;
+    const __mmask8 in = nbs__cs_core8_in(&bx, kk, dim, &rel);
+    rel = _mm512_sll_epi64(rel, spad);
     uint64_t wv[8], dv[8];
     double cv[3][8];
-    _mm512_storeu_si512((void *)wv, _mm512_or_si512(_mm512_sll_epi64(kk, seb), es));
-    _mm512_storeu_si512((void *)dv, _mm512_and_si512(_mm512_srl_epi64(kk, sdig), dm));
+    _mm512_storeu_si512((void *)wv, _mm512_or_si512(_mm512_sll_epi64(rel, seb), es));
+    _mm512_storeu_si512((void *)dv, _mm512_and_si512(_mm512_srl_epi64(rel, sdig), dm));
     for (int a = 0; a < dim; a++) _mm512_storeu_pd(cv[a], c[a]);
     for (int l = 0; l < 8; l++) {
-      if (core && !(in >> l & 1)) {
+      if (!(in >> l & 1)) {
         ok[o] = kl[l];
         oe[o++] = e + l;
         continue;
@@ -4170,7 +4157,7 @@ nbs__cs_part_scatter512_body(const nbs__cs_keying *kg, const double *restrict x,
     es = _mm512_add_epi64(es, eight);
   }
   nbs__cs_part_scatter(kg, x, r, dim, radii, e, to, eb, kshift, dmask, h, start, wb, d, core,
-                       core ? ok + o : NULL, core ? oe + o : NULL);
+                       ok + o, oe + o);
 }
 
 /* nbs__cs_part_scatter512_body with dim and radii constants, for nbs__cs_core_part (core not
@@ -4226,6 +4213,46 @@ static void nbs__cs_part_bucket(const nbs__cs_dst *d, uint32_t s0, int32_t len, 
   }
 }
 
+/* A thread's scatter of a partition, the elements [f, to) (nbs__cs_part_scatter, with dim,
+ * radii and whether there is a core box constants; with a core box and AVX-512,
+ * nbs__cs_part_scatter512): h its counts' places, wb its line buffers. */
+static void nbs__cs_part_thread(const nbs__cs_keying *kg, const nbs__run *run,
+                                const nbs__cs_dst *d, int32_t f, int32_t to, int eb, int kshift,
+                                uint64_t dmask, uint32_t *h, uint64_t *wb,
+                                const nbs__cs_corebox *core, uint64_t *ok, int32_t *oe) {
+  uint32_t start[(size_t)1 << NBS__RADIX_BITS];
+  memcpy(start, h, (size_t)(dmask + 1) * sizeof *h);
+  const double *x = run->x, *r = run->r;
+  const int dim = kg->dim;
+  const bool radii = r != NULL;
+#if NBS__CS_AVX512
+  if (core && run->ctx->simd == NBS__SIMD_AVX512) {
+    nbs__cs_part_scatter512(kg, x, r, f, to, eb, kshift, dmask, h, start, wb, d, core, ok, oe);
+    return;
+  }
+#endif
+#define NBS__CS_SCATTER(C, K, E)                                                                \
+  do {                                                                                        \
+    if (dim == 3 && radii) {                                                                  \
+      nbs__cs_part_scatter(kg, x, r, 3, true, f, to, eb, kshift, dmask, h, start, wb, d, C, K, E); \
+    } else if (dim == 3) {                                                                    \
+      nbs__cs_part_scatter(kg, x, r, 3, false, f, to, eb, kshift, dmask, h, start, wb, d, C, K,  \
+                           E);                                                                \
+    } else if (radii) {                                                                       \
+      nbs__cs_part_scatter(kg, x, r, 2, true, f, to, eb, kshift, dmask, h, start, wb, d, C, K, E); \
+    } else {                                                                                  \
+      nbs__cs_part_scatter(kg, x, r, 2, false, f, to, eb, kshift, dmask, h, start, wb, d, C, K,  \
+                           E);                                                                \
+    }                                                                                         \
+  } while (0)
+  if (core) {
+    NBS__CS_SCATTER(core, ok, oe);
+  } else {
+    NBS__CS_SCATTER(NULL, NULL, NULL);
+  }
+#undef NBS__CS_SCATTER
+}
+
 /* Steps 1-3 at once, for packed keys, where the input is larger than 1 GiB
  * (nbs__cellsort_partition_min), or the context has timed it faster (nbs__cs_way): the keys'
  * top digit counted (a pass over the input, in order, computing each key:
@@ -4265,7 +4292,6 @@ static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__
                               char *spare, size_t spare_bytes) {
   const int32_t n = c->n;
   const int dim = c->dim;
-  const bool radii = c->rs != NULL;
   const size_t B = dg.buckets;
   const nbs__cs_dst d = nbs__cs_dst_of(c);
   const size_t wc = B * (size_t)(1 + d.S) * NBS__CS_LINE * sizeof(uint64_t);
@@ -4308,24 +4334,8 @@ static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__
     if (fits) {
       NBS__PARTS(t, threads) {
         const int32_t f = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
-        uint32_t *h = hist + (size_t)t * B;
-        uint32_t start[(size_t)1 << NBS__RADIX_BITS];
-        memcpy(start, h, B * sizeof *h);
-        uint64_t *wb = (uint64_t *)(void *)(spare + (size_t)t * wc);
-        const double *r = run->r;
-        if (dim == 3 && radii) {
-          nbs__cs_part_scatter(kg, x, r, 3, true, f, to, eb, kshift, dmask, h, start, wb, &d,
-                               NULL, NULL, NULL);
-        } else if (dim == 3) {
-          nbs__cs_part_scatter(kg, x, r, 3, false, f, to, eb, kshift, dmask, h, start, wb, &d,
-                               NULL, NULL, NULL);
-        } else if (radii) {
-          nbs__cs_part_scatter(kg, x, r, 2, true, f, to, eb, kshift, dmask, h, start, wb, &d,
-                               NULL, NULL, NULL);
-        } else {
-          nbs__cs_part_scatter(kg, x, r, 2, false, f, to, eb, kshift, dmask, h, start, wb, &d,
-                               NULL, NULL, NULL);
-        }
+        nbs__cs_part_thread(kg, run, &d, f, to, eb, kshift, dmask, hist + (size_t)t * B,
+                            (uint64_t *)(void *)(spare + (size_t)t * wc), NULL, NULL, NULL);
       }
       /* then each part's buckets (those that start in it) are sorted */
 #if defined(_OPENMP)
@@ -4443,7 +4453,6 @@ static bool nbs__cs_core_part(const nbs__cs *c, const nbs__run *run, const nbs__
                               size_t spare_bytes) {
   const int32_t n = c->n;
   const int dim = c->dim;
-  const bool radii = c->rs != NULL;
   const double *x = run->x;
   /* a */
   nbs__cs_corebox box;
@@ -4533,32 +4542,9 @@ static bool nbs__cs_core_part(const nbs__cs *c, const nbs__run *run, const nbs__
     if (fits) {
       NBS__PARTS(t, threads) {
         const int32_t f = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
-        uint32_t *h = hist + (size_t)t * B;
-        uint32_t start[(size_t)1 << NBS__RADIX_BITS];
-        memcpy(start, h, B * sizeof *h);
-        uint64_t *wb = (uint64_t *)(void *)(spare + (size_t)t * wc);
-        const double *r = run->r;
-        uint64_t *tk = ok + ofrom[t];
-        int32_t *te = oe + ofrom[t];
-#if NBS__CS_AVX512
-        if (run->ctx->simd == NBS__SIMD_AVX512) {
-          nbs__cs_part_scatter512(kg, x, r, f, to, eb, kshift, dmask, h, start, wb, &d, &box,
-                                  tk, te);
-        } else
-#endif
-        if (dim == 3 && radii) {
-          nbs__cs_part_scatter(kg, x, r, 3, true, f, to, eb, kshift, dmask, h, start, wb, &d,
-                               &box, tk, te);
-        } else if (dim == 3) {
-          nbs__cs_part_scatter(kg, x, r, 3, false, f, to, eb, kshift, dmask, h, start, wb, &d,
-                               &box, tk, te);
-        } else if (radii) {
-          nbs__cs_part_scatter(kg, x, r, 2, true, f, to, eb, kshift, dmask, h, start, wb, &d,
-                               &box, tk, te);
-        } else {
-          nbs__cs_part_scatter(kg, x, r, 2, false, f, to, eb, kshift, dmask, h, start, wb, &d,
-                               &box, tk, te);
-        }
+        nbs__cs_part_thread(kg, run, &d, f, to, eb, kshift, dmask, hist + (size_t)t * B,
+                            (uint64_t *)(void *)(spare + (size_t)t * wc), &box, ok + ofrom[t],
+                            oe + ofrom[t]);
       }
 #if defined(_OPENMP)
 #pragma omp barrier

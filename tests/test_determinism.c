@@ -429,6 +429,21 @@ static void test_caller_threads(void) {
 #endif
 }
 
+/* Two contexts of `threads` threads: *part created with NBS_PARTITION=always in the
+ * environment, *sort with NBS_PARTITION=never; false where either could not be. */
+static bool partition_contexts(int threads, nbs_context **part, nbs_context **sort) {
+  nbs_context_def cdef = nbs_default_context_def();
+  cdef.threads = threads;
+  CHECK_TRUE(setenv("NBS_PARTITION", "always", 1) == 0);
+  nbs_status st = nbs_context_create(&cdef, part);
+  CHECK_TRUE(setenv("NBS_PARTITION", "never", 1) == 0);
+  nbs_status st2 = nbs_context_create(&cdef, sort);
+  unsetenv("NBS_PARTITION");
+  CHECK_STATUS(st, NBS_OK);
+  CHECK_STATUS(st2, NBS_OK);
+  return st == NBS_OK && st2 == NBS_OK;
+}
+
 /* The partition: cellsort's sort by the top digit with the coordinates carried along
  * (NBS_PARTITION=always, read when a context is created; by default only inputs larger than
  * 1 GiB take it) gives the bytes of the sort and the gather (NBS_PARTITION=never), in
@@ -468,16 +483,8 @@ static void test_partition(void) {
     const bool expect = sc < 8;
     for (size_t t = 0; t < sizeof counts / sizeof *counts; t++) {
       for (int mode = 0; mode < 2; mode++) {
-        nbs_context_def cdef = nbs_default_context_def();
-        cdef.threads = counts[t];
         nbs_context *part, *sort;
-        ASSERT_TRUE(setenv("NBS_PARTITION", "always", 1) == 0);
-        nbs_status st = nbs_context_create(&cdef, &part);
-        ASSERT_TRUE(setenv("NBS_PARTITION", "never", 1) == 0);
-        nbs_status st2 = nbs_context_create(&cdef, &sort);
-        unsetenv("NBS_PARTITION");
-        ASSERT_OK(st);
-        ASSERT_OK(st2);
+        ASSERT_TRUE(partition_contexts(counts[t], &part, &sort));
         pair_list a, b, again;
         ASSERT_OK(detect_raw(part, &s, NBS_CELLSORT, (nbs_mode)mode, &a));
         const bool took = part->cs_partitioned;
@@ -567,16 +574,8 @@ static void test_core_partition(void) {
     }
     for (size_t t = 0; t < sizeof counts / sizeof *counts; t++) {
       for (int mode = 0; mode < 2; mode++) {
-        nbs_context_def cdef = nbs_default_context_def();
-        cdef.threads = counts[t];
         nbs_context *part, *sort;
-        ASSERT_TRUE(setenv("NBS_PARTITION", "always", 1) == 0);
-        nbs_status st = nbs_context_create(&cdef, &part);
-        ASSERT_TRUE(setenv("NBS_PARTITION", "never", 1) == 0);
-        nbs_status st2 = nbs_context_create(&cdef, &sort);
-        unsetenv("NBS_PARTITION");
-        ASSERT_OK(st);
-        ASSERT_OK(st2);
+        ASSERT_TRUE(partition_contexts(counts[t], &part, &sort));
         pair_list a, b;
         ASSERT_OK(detect_raw(part, &s, NBS_CELLSORT, (nbs_mode)mode, &a));
         CHECK_MSG(part->cs_partitioned, "scene %d (%dD), %d threads: the partition did not run",
