@@ -3903,52 +3903,52 @@ static inline uint64_t nbs__cs_core_whole(const nbs__cs_corebox *b, int sy, int 
          ((rel & m0) + b->lo[0]);
 }
 
+/* Outlier kk (a whole key outside box b) counted in o[]: o[0] where its key is below the
+ * box's lowest, o[2] above its highest, else o[1] and b->between[u], u the bucket whose range
+ * holds it: the number of buckets past the first whose lowest key is below it (no core key is
+ * equal to it). */
+static inline void nbs__cs_core_outlier(const nbs__cs_corebox *b, uint64_t kk, int32_t o[3]) {
+  if (kk < b->wmin) {
+    o[0]++;
+  } else if (kk > b->wmax) {
+    o[2]++;
+  } else {
+    int lo_ = 1, hi = b->buckets;
+    while (lo_ < hi) {
+      const int m = lo_ + (hi - lo_) / 2;
+      if (b->bound[m] < kk) lo_ = m + 1;
+      else hi = m;
+    }
+#if defined(_OPENMP)
+#pragma omp atomic
+#endif
+    b->between[lo_ - 1]++;
+    o[1]++;
+  }
+}
+
 /* The counts of the keys' top digit (at kshift, dmask) of the elements [f, to), into h.
  * With a core box (nbs__cs_core_part; NULL where this is inlined for the whole keys), the
  * digit of the key relative to it, for the elements in it; the others (outliers) counted in
- * out[]: those whose keys are below the box's lowest, between its lowest and highest (also
- * in core->between, by bucket), and above its highest. out[3] nonzero: h and out[0..2] hold
- * counts already (nbs__cs_core_count512's), added to. */
+ * out[] (nbs__cs_core_outlier). Added to h and out, which the caller clears. */
 static inline __attribute__((always_inline)) void
 nbs__cs_part_count(const nbs__cs_keying *kg, const double *restrict x, int dim, int32_t f,
                    int32_t to, int kshift, uint64_t dmask, uint32_t *restrict h,
-                   const nbs__cs_corebox *core, int32_t out[4]) {
+                   const nbs__cs_corebox *core, int32_t out[3]) {
   const nbs__grid g = *kg->g;
   nbs__cs_keying k1 = *kg;
   k1.g = &g;
   k1.dim = dim;
-  if (!out || out[3] == 0) memset(h, 0, (size_t)(dmask + 1) * sizeof *h);
   nbs__cs_corebox box;
   if (core) box = *core;
-  int32_t o[3] = {0, 0, 0};
-  if (core && out[3]) memcpy(o, out, sizeof o); /* the counts so far */
   for (int32_t k = f; k < to; k++) {
     uint64_t kk = nbs__cs_cellkey(&k1, x + (size_t)k * (size_t)dim);
     if (core && !nbs__cs_in_core(&box, k1.sy, k1.sz, dim, kk, &kk)) {
-      if (kk < box.wmin) {
-        o[0]++;
-      } else if (kk > box.wmax) {
-        o[2]++;
-      } else {
-        /* between: bucket u, the number of buckets past the first whose lowest key is below
-         * it (no core key is equal to it) */
-        int lo_ = 1, hi = box.buckets;
-        while (lo_ < hi) {
-          const int m = lo_ + (hi - lo_) / 2;
-          if (box.bound[m] < kk) lo_ = m + 1;
-          else hi = m;
-        }
-#if defined(_OPENMP)
-#pragma omp atomic
-#endif
-        box.between[lo_ - 1]++;
-        o[1]++;
-      }
+      nbs__cs_core_outlier(&box, kk, out);
       continue;
     }
     h[(kk >> kshift) & dmask]++;
   }
-  if (core) memcpy(out, o, sizeof o);
 }
 
 #if NBS__CS_AVX512
@@ -3962,7 +3962,7 @@ nbs__cs_part_count(const nbs__cs_keying *kg, const double *restrict x, int dim, 
 static inline __attribute__((always_inline)) NBS__CS_AVX512_TARGET void
 nbs__cs_core_count512_body(const nbs__cs_keying *kg, const double *restrict x, int dim,
                            int32_t f, int32_t to, int kshift, uint64_t dmask,
-                           uint32_t *restrict h, const nbs__cs_corebox *core, int32_t out[4]) {
+                           uint32_t *restrict h, const nbs__cs_corebox *core, int32_t out[3]) {
   nbs__cs_keys8 v;
   nbs__cs_keys8_init(&v, kg);
   const nbs__cs_corebox box = *core;
@@ -3970,8 +3970,6 @@ nbs__cs_core_count512_body(const nbs__cs_keying *kg, const double *restrict x, i
   nbs__cs_core8_init(&bx, kg, box.lo, box.cw);
   const __m128i sdig = _mm_cvtsi32_si128(kshift - box.pad);
   const __m512i dm = _mm512_set1_epi64((int64_t)dmask);
-  memset(h, 0, (size_t)(dmask + 1) * sizeof *h);
-  int32_t o[3] = {0, 0, 0};
   int32_t e = f;
   for (; to - e >= 8; e += 8) {
     __m512d c[3], t[3];
@@ -3991,34 +3989,18 @@ nbs__cs_core_count512_body(const nbs__cs_keying *kg, const double *restrict x, i
     for (int l = 0; l < 8; l++) {
       if (in >> l & 1) {
         h[dg[l]]++;
-      } else if (kl[l] < box.wmin) {
-        o[0]++;
-      } else if (kl[l] > box.wmax) {
-        o[2]++;
       } else {
-        int lo_ = 1, hi = box.buckets;
-        while (lo_ < hi) {
-          const int m = lo_ + (hi - lo_) / 2;
-          if (box.bound[m] < kl[l]) lo_ = m + 1;
-          else hi = m;
-        }
-#if defined(_OPENMP)
-#pragma omp atomic
-#endif
-        box.between[lo_ - 1]++;
-        o[1]++;
+        nbs__cs_core_outlier(&box, kl[l], out);
       }
     }
   }
-  memcpy(out, o, sizeof o);
-  out[3] = 1;
   nbs__cs_part_count(kg, x, dim, e, to, kshift, dmask, h, core, out);
 }
 
 NBS__CS_AVX512_TARGET
 static void nbs__cs_core_count512(const nbs__cs_keying *kg, const double *x, int32_t f,
                                   int32_t to, int kshift, uint64_t dmask, uint32_t *h,
-                                  const nbs__cs_corebox *core, int32_t out[4]) {
+                                  const nbs__cs_corebox *core, int32_t out[3]) {
   if (kg->dim == 3) {
     nbs__cs_core_count512_body(kg, x, 3, f, to, kshift, dmask, h, core, out);
   } else {
@@ -4314,10 +4296,13 @@ static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__
       uint32_t *h = hist + (size_t)t * B;
       if (counted) {
         /* nbs__cellsort_fresh's pass counted them, with this keying and these parts */
-      } else if (dim == 3) {
-        nbs__cs_part_count(kg, x, 3, f, to, kshift, dmask, h, NULL, NULL);
       } else {
-        nbs__cs_part_count(kg, x, 2, f, to, kshift, dmask, h, NULL, NULL);
+        memset(h, 0, B * sizeof *h);
+        if (dim == 3) {
+          nbs__cs_part_count(kg, x, 3, f, to, kshift, dmask, h, NULL, NULL);
+        } else {
+          nbs__cs_part_count(kg, x, 2, f, to, kshift, dmask, h, NULL, NULL);
+        }
       }
     }
 #if defined(_OPENMP)
@@ -4480,7 +4465,7 @@ static bool nbs__cs_core_part(const nbs__cs *c, const nbs__run *run, const nbs__
   const nbs__cs_dst d = nbs__cs_dst_of(c);
   const size_t wc = B * (size_t)(1 + d.S) * NBS__CS_LINE * sizeof(uint64_t);
   uint32_t top[((size_t)1 << NBS__RADIX_BITS) + 1];
-  int32_t out[NBS__THREADS_MAX][4], ofrom[NBS__THREADS_MAX + 1];
+  int32_t out[NBS__THREADS_MAX][3], ofrom[NBS__THREADS_MAX + 1];
   int32_t below = 0, mid = 0, above = 0;
   uint32_t most = 0;
   size_t per = 0;
@@ -4495,7 +4480,8 @@ static bool nbs__cs_core_part(const nbs__cs *c, const nbs__run *run, const nbs__
     NBS__PARTS(t, threads) {
       const int32_t f = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
       uint32_t *h = hist + (size_t)t * B;
-      out[t][3] = 0;
+      memset(h, 0, B * sizeof *h);
+      memset(out[t], 0, sizeof out[t]);
 #if NBS__CS_AVX512
       if (run->ctx->simd == NBS__SIMD_AVX512) {
         nbs__cs_core_count512(kg, x, f, to, kshift, dmask, h, &box, out[t]);
