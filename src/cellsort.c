@@ -3473,6 +3473,18 @@ nbs__cs_core8_in(const nbs__cs_core8 *b, __m512i kk, int dim, __m512i *rel) {
   return in;
 }
 
+/* The 8 elements at x8 (dim constant where this is inlined): their coordinates to c[], their
+ * whole keys to *kk (nbs__cs_key8_of), and which of them lie in the core box (the mask), with
+ * their keys relative to it to *rel (nbs__cs_core8_in). */
+static inline __attribute__((always_inline)) NBS__CS_AVX512_TARGET __mmask8
+nbs__cs_core8_next(const nbs__cs_keys8 *v, const nbs__cs_core8 *b, const double *x8, int dim,
+                   __m512d c[3], __m512i *kk, __m512i *rel) {
+  __m512d t[3];
+  nbs__cs_pos8(v, x8, dim, c, t);
+  *kk = nbs__cs_key8_of(v, t, dim);
+  return nbs__cs_core8_in(b, *kk, dim, rel);
+}
+
 /* nbs__cs_core_split 8 elements at a time (AVX-512: F, DQ, VL), the keys as nbs__cs_key8_of
  * computes them (the same keys bit for bit): each lane's offsets from the core box's corner
  * compared with its sides at once, and the lanes in the box and the others each packed by a
@@ -3496,11 +3508,9 @@ nbs__cs_core_split512_body(const nbs__cs_keying *kg, const double *restrict x, i
   __m512i es = _mm512_add_epi64(_mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0), _mm512_set1_epi64(f));
   int32_t cc = 0, oc = 0, e = f;
   for (; to - e >= 8; e += 8) {
-    __m512d c[3], t[3];
-    nbs__cs_pos8(&v, x + (size_t)e * (size_t)dim, dim, c, t);
-    const __m512i kk = nbs__cs_key8_of(&v, t, dim);
-    __m512i w;
-    const __mmask8 in = nbs__cs_core8_in(&bx, kk, dim, &w);
+    __m512d c[3];
+    __m512i kk, w;
+    const __mmask8 in = nbs__cs_core8_next(&v, &bx, x + (size_t)e * (size_t)dim, dim, c, &kk, &w);
     w = _mm512_or_si512(_mm512_sll_epi64(w, seb), es);
     _mm512_storeu_si512((void *)(A + cc), _mm512_maskz_compress_epi64(in, w));
     cc += __builtin_popcount(in);
@@ -3972,12 +3982,10 @@ nbs__cs_core_count512_body(const nbs__cs_keying *kg, const double *restrict x, i
   const __m512i dm = _mm512_set1_epi64((int64_t)dmask);
   int32_t e = f;
   for (; to - e >= 8; e += 8) {
-    __m512d c[3], t[3];
-    nbs__cs_pos8(&v, x + (size_t)e * (size_t)dim, dim, c, t);
-    const __m512i kk = nbs__cs_key8_of(&v, t, dim);
+    __m512d c[3];
+    __m512i kk, w;
+    const __mmask8 in = nbs__cs_core8_next(&v, &bx, x + (size_t)e * (size_t)dim, dim, c, &kk, &w);
     /* the digit of (relative key << pad) at kshift: the relative key's at kshift - pad */
-    __m512i w;
-    const __mmask8 in = nbs__cs_core8_in(&bx, kk, dim, &w);
     uint64_t dg[8];
     _mm512_storeu_si512((void *)dg, _mm512_and_si512(_mm512_srl_epi64(w, sdig), dm));
     if (in == 0xff) {
@@ -4114,13 +4122,12 @@ nbs__cs_part_scatter512_body(const nbs__cs_keying *kg, const double *restrict x,
   __m512i es = _mm512_add_epi64(_mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0), _mm512_set1_epi64(f));
   int32_t o = 0, e = f;
   for (; to - e >= 8; e += 8) {
-    __m512d c[3], t[3];
-    nbs__cs_pos8(&v, x + (size_t)e * (size_t)dim, dim, c, t);
-    const __m512i kk = nbs__cs_key8_of(&v, t, dim);
+    __m512d c[3];
+    __m512i kk, rel;
+    const __mmask8 in =
+        nbs__cs_core8_next(&v, &bx, x + (size_t)e * (size_t)dim, dim, c, &kk, &rel);
     uint64_t kl[8];
     _mm512_storeu_si512((void *)kl, kk);
-    __m512i rel;
-    const __mmask8 in = nbs__cs_core8_in(&bx, kk, dim, &rel);
     rel = _mm512_sll_epi64(rel, spad);
     uint64_t wv[8], dv[8];
     double cv[3][8];
@@ -4235,6 +4242,65 @@ static void nbs__cs_part_thread(const nbs__cs_keying *kg, const nbs__run *run,
 #undef NBS__CS_SCATTER
 }
 
+/* A thread's counts of a partition, the elements [f, to), into h (its dmask + 1 counts,
+ * cleared first): the top digits (at kshift) of their keys (nbs__cs_part_count; with a core
+ * box, of the keys relative to it, the outliers counted in out[], cleared first too, and with
+ * AVX-512 by nbs__cs_core_count512). */
+static void nbs__cs_part_counts(const nbs__cs_keying *kg, const nbs__run *run, int32_t f,
+                                int32_t to, int kshift, uint64_t dmask, uint32_t *h,
+                                const nbs__cs_corebox *core, int32_t out[3]) {
+  const double *x = run->x;
+  memset(h, 0, (size_t)(dmask + 1) * sizeof *h);
+  if (core) {
+    memset(out, 0, 3 * sizeof *out);
+#if NBS__CS_AVX512
+    if (run->ctx->simd == NBS__SIMD_AVX512) {
+      nbs__cs_core_count512(kg, x, f, to, kshift, dmask, h, core, out);
+    } else
+#endif
+    if (kg->dim == 3) {
+      nbs__cs_part_count(kg, x, 3, f, to, kshift, dmask, h, core, out);
+    } else {
+      nbs__cs_part_count(kg, x, 2, f, to, kshift, dmask, h, core, out);
+    }
+  } else if (kg->dim == 3) {
+    nbs__cs_part_count(kg, x, 3, f, to, kshift, dmask, h, NULL, NULL);
+  } else {
+    nbs__cs_part_count(kg, x, 2, f, to, kshift, dmask, h, NULL, NULL);
+  }
+}
+
+static void nbs__cs_core_merge(const nbs__cs *c, const nbs__run *run, const nbs__cs_corebox *b,
+                               const nbs__cs_keying *kg, int eb, int32_t s0, int32_t len,
+                               const int32_t *oe, int32_t u);
+
+/* A partition's last step for part t of `threads` (of the places [0, n)): each bucket that
+ * starts in it (top[b], of the B buckets) put in order in the cache (nbs__cs_part_bucket,
+ * with h the thread's counts and `scratch` its scratch for a bucket: the words' sort and the
+ * coordinates' permutation, `most` entries of 8 bytes, then the elements and their ranks, 4
+ * bytes each); with a core box, each bucket's outliers between (core->between[b] of them,
+ * their places at its end, their elements oe[mfrom[b] ...] in order) then merged into it
+ * (nbs__cs_core_merge). */
+static void nbs__cs_part_buckets(const nbs__cs *c, const nbs__run *run, const nbs__cs_dst *d,
+                                 int t, int threads, const uint32_t *top, size_t B, int eb,
+                                 nbs__digits dg, uint32_t *h, uint32_t most, char *scratch,
+                                 const nbs__cs_corebox *core, const nbs__cs_keying *kg,
+                                 const uint32_t *mfrom, const int32_t *oe) {
+  const uint32_t from = (uint32_t)nbs__chunk(c->n, t, threads);
+  const uint32_t end = (uint32_t)nbs__chunk(c->n, t + 1, threads);
+  uint64_t *other = (uint64_t *)(void *)scratch;
+  int32_t *gid = (int32_t *)(void *)(other + most), *rank = gid + most;
+  for (size_t b = 0; b < B; b++) {
+    if (top[b] < from || top[b] >= end || top[b + 1] == top[b]) continue;
+    const uint32_t u = core ? core->between[b] : 0;
+    const int32_t len = (int32_t)(top[b + 1] - top[b] - u);
+    if (len > 0) nbs__cs_part_bucket(d, top[b], len, eb, dg, h, other, gid, rank);
+    if (u > 0) {
+      nbs__cs_core_merge(c, run, core, kg, eb, (int32_t)top[b], len, oe + mfrom[b], (int32_t)u);
+    }
+  }
+}
+
 /* Steps 1-3 at once, for packed keys, where the input is larger than 1 GiB
  * (nbs__cellsort_partition_min), or the context has timed it faster (nbs__cs_way): the keys'
  * top digit counted (a pass over the input, in order, computing each key:
@@ -4273,14 +4339,12 @@ static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__
                               int eb, nbs__digits dg, uint32_t *hist, bool counted, int threads,
                               char *spare, size_t spare_bytes) {
   const int32_t n = c->n;
-  const int dim = c->dim;
   const size_t B = dg.buckets;
   const nbs__cs_dst d = nbs__cs_dst_of(c);
   const size_t wc = B * (size_t)(1 + d.S) * NBS__CS_LINE * sizeof(uint64_t);
   if (!nbs__radix_top_first(n, dg) || (size_t)threads * wc > spare_bytes) return false;
   const int kshift = (dg.passes - 1) * dg.width;
   const uint64_t dmask = B - 1;
-  const double *x = run->x;
   uint32_t top[((size_t)1 << NBS__RADIX_BITS) + 1];
   uint32_t most = 0;
   size_t per = 0;
@@ -4292,17 +4356,11 @@ static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__
 #endif
   {
     NBS__PARTS(t, threads) {
-      const int32_t f = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
-      uint32_t *h = hist + (size_t)t * B;
-      if (counted) {
-        /* nbs__cellsort_fresh's pass counted them, with this keying and these parts */
-      } else {
-        memset(h, 0, B * sizeof *h);
-        if (dim == 3) {
-          nbs__cs_part_count(kg, x, 3, f, to, kshift, dmask, h, NULL, NULL);
-        } else {
-          nbs__cs_part_count(kg, x, 2, f, to, kshift, dmask, h, NULL, NULL);
-        }
+      /* (where `counted`, nbs__cellsort_fresh's pass counted them, with this keying and
+       * these parts) */
+      if (!counted) {
+        nbs__cs_part_counts(kg, run, nbs__chunk(n, t, threads), nbs__chunk(n, t + 1, threads),
+                            kshift, dmask, hist + (size_t)t * B, NULL, NULL);
       }
     }
 #if defined(_OPENMP)
@@ -4327,16 +4385,8 @@ static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__
 #pragma omp barrier
 #endif
       NBS__PARTS(t, threads) {
-        const uint32_t from = (uint32_t)nbs__chunk(n, t, threads);
-        const uint32_t end = (uint32_t)nbs__chunk(n, t + 1, threads);
-        uint32_t *h = hist + (size_t)t * B;
-        uint64_t *other = (uint64_t *)(void *)(spare + (size_t)t * per);
-        int32_t *gid = (int32_t *)(void *)(other + most), *rank = gid + most;
-        for (size_t b = 0; b < B; b++) {
-          if (top[b] < from || top[b] >= end || top[b + 1] == top[b]) continue;
-          nbs__cs_part_bucket(&d, top[b], (int32_t)(top[b + 1] - top[b]), eb, dg, h, other,
-                              gid, rank);
-        }
+        nbs__cs_part_buckets(c, run, &d, t, threads, top, B, eb, dg, hist + (size_t)t * B, most,
+                             spare + (size_t)t * per, NULL, kg, NULL, NULL);
       }
     }
   }
@@ -4437,8 +4487,6 @@ static bool nbs__cs_core_part(const nbs__cs *c, const nbs__run *run, const nbs__
                               int eb, int bits, uint32_t *hist, int threads, char *spare,
                               size_t spare_bytes) {
   const int32_t n = c->n;
-  const int dim = c->dim;
-  const double *x = run->x;
   /* a */
   nbs__cs_corebox box;
   const int cb = nbs__cs_core_box(c, run, kg, bits, box.lo, box.cw);
@@ -4478,20 +4526,8 @@ static bool nbs__cs_core_part(const nbs__cs *c, const nbs__run *run, const nbs__
   {
     /* b */
     NBS__PARTS(t, threads) {
-      const int32_t f = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
-      uint32_t *h = hist + (size_t)t * B;
-      memset(h, 0, B * sizeof *h);
-      memset(out[t], 0, sizeof out[t]);
-#if NBS__CS_AVX512
-      if (run->ctx->simd == NBS__SIMD_AVX512) {
-        nbs__cs_core_count512(kg, x, f, to, kshift, dmask, h, &box, out[t]);
-      } else
-#endif
-      if (dim == 3) {
-        nbs__cs_part_count(kg, x, 3, f, to, kshift, dmask, h, &box, out[t]);
-      } else {
-        nbs__cs_part_count(kg, x, 2, f, to, kshift, dmask, h, &box, out[t]);
-      }
+      nbs__cs_part_counts(kg, run, nbs__chunk(n, t, threads), nbs__chunk(n, t + 1, threads),
+                          kshift, dmask, hist + (size_t)t * B, &box, out[t]);
     }
 #if defined(_OPENMP)
 #pragma omp barrier
@@ -4557,20 +4593,8 @@ static bool nbs__cs_core_part(const nbs__cs *c, const nbs__run *run, const nbs__
       }
       /* e */
       NBS__PARTS(t, threads) {
-        const uint32_t from = (uint32_t)nbs__chunk(n, t, threads);
-        const uint32_t end = (uint32_t)nbs__chunk(n, t + 1, threads);
-        uint32_t *h = hist + (size_t)t * B;
-        uint64_t *other = (uint64_t *)(void *)(spare + (size_t)t * per);
-        int32_t *gid = (int32_t *)(void *)(other + most), *rank = gid + most;
-        for (size_t b = 0; b < B; b++) {
-          if (top[b] < from || top[b] >= end || top[b + 1] == top[b]) continue;
-          const int32_t len = (int32_t)(top[b + 1] - top[b] - between[b]);
-          if (len > 0) nbs__cs_part_bucket(&d, top[b], len, eb, dg, h, other, gid, rank);
-          if (between[b] > 0) {
-            nbs__cs_core_merge(c, run, &box, kg, eb, (int32_t)top[b], len,
-                               se + below + mfrom[b], (int32_t)between[b]);
-          }
-        }
+        nbs__cs_part_buckets(c, run, &d, t, threads, top, B, eb, dg, hist + (size_t)t * B, most,
+                             spare + (size_t)t * per, &box, kg, mfrom, se + below);
       }
     }
   }
