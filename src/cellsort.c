@@ -4133,7 +4133,9 @@ nbs__cs_part_scatter512_body(const nbs__cs_keying *kg, const double *restrict x,
     double cv[3][8];
     _mm512_storeu_si512((void *)wv, _mm512_or_si512(_mm512_sll_epi64(rel, seb), es));
     _mm512_storeu_si512((void *)dv, _mm512_and_si512(_mm512_srl_epi64(rel, sdig), dm));
-    for (int a = 0; a < dim; a++) _mm512_storeu_pd(cv[a], c[a]);
+    /* c[] holds the key's axes: key axis a is the caller's coordinate kg->c[a] (the rows
+     * lie along the axis with the most cells), and the arrays keep the caller's order */
+    for (int a = 0; a < dim; a++) _mm512_storeu_pd(cv[kg->c[a]], c[a]);
     for (int l = 0; l < 8; l++) {
       if (!(in >> l & 1)) {
         ok[o] = kl[l];
@@ -5193,6 +5195,7 @@ nbs_status nbs__cellsort(nbs__run *run) {
   ctx->cs_order_n = 0; /* no order until this detection's is complete */
   ctx->cs_kept_ok = false;
   ctx->cs_outliers = -1;
+  ctx->cs_partitioned = false;
   char *w = nbs__cs_base(ctx->work);
   nbs__cs c;
   c.run = run;

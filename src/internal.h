@@ -150,7 +150,8 @@ struct nbs_context {
   int64_t cs_outliers;
   /* cellsort's partition (nbs__cs_partition) is tried where the input's coordinates (and
    * radii) take more bytes than this (nbs__cellsort_partition_min); cs_partitioned says
-   * whether the last from-scratch detection took it (read by the tests). */
+   * whether the last cellsort detection took it (one that started from the last order did
+   * not; read by the tests). */
   size_t cs_part_min;
   bool cs_partitioned;
   /* Between NBS__CS_TUNE_MIN bytes and cs_part_min, which of the two ways a detection from

@@ -457,8 +457,8 @@ static bool partition_contexts(int threads, nbs_context **part, nbs_context **so
  * counted the digits, must give way to the sort (a bucket too large for a cache). */
 static void test_partition(void) {
   const int counts[] = {1, 2, 3};
-  for (int sc = 0; sc < 9; sc++) {
-    const int dim = sc == 8 ? 3 : 2 + sc % 2;
+  for (int sc = 0; sc < 11; sc++) {
+    const int dim = sc == 8 || sc == 9 ? 3 : sc == 10 ? 2 : 2 + sc % 2;
     scene s;
     switch (sc / 2) {
     case 0:
@@ -531,14 +531,30 @@ static void test_partition(void) {
  * or when the partition does not run (ctx->cs_partitioned) or finds no outliers. */
 static void test_core_partition(void) {
   const int counts[] = {1, 2, 3};
-  for (int sc = 0; sc < 9; sc++) {
-    const int dim = sc == 8 ? 3 : 2 + sc % 2;
+  for (int sc = 0; sc < 11; sc++) {
+    const int dim = sc == 8 || sc == 9 ? 3 : sc == 10 ? 2 : 2 + sc % 2;
     const double box = dim == 3 ? 40.0 : 250.0, far = 1e6;
     scene s = det_scene(sc % 4 < 2 ? DET_UNIFORM : DET_RADII, dim, 60000, box, 0.0, 41 + sc);
     int64_t outliers = 0;
     uint64_t rng = 71 + (uint64_t)sc;
     for (int64_t k = 0; k < s.n; k++) {
       double *p = s.coords + k * dim;
+      if (sc >= 9) {
+        /* turned: outliers 4e7 diameters below on the last axis only, which then has the
+         * most cells, so that the keys' rows lie along it (the key's x is the caller's last
+         * coordinate, its y the first) and the partition must store each coordinate in the
+         * caller's order; and a sparse skirt below the box on the first axis, which the
+         * sample leaves out of the core box, whose elements (outliers between) touch the
+         * core's: a pair of a core element and an outlier, whose coordinates came by two
+         * ways, is found only if both keep the caller's order */
+        if (k % 997 == 0) {
+          p[dim - 1] = -4e7 - (double)(k % 5) * 0.6;
+          outliers++;
+        } else if (k % 67 == 0) {
+          p[0] = -0.3 * (double)(k % 20);
+        }
+        continue;
+      }
       if (sc == 8) {
         /* 3D, the whole keys packed (35 bits): a few outliers 5000 diameters out along x
          * (the rows' axis, whose grid is then fine enough for the sample to leave out what

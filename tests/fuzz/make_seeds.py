@@ -6,11 +6,15 @@ fuzzer starts from every adversarial family at once: lattices at exactly the con
 distance and on cell faces, identical points, chains at ri + rj (and one ulp off), huge
 offsets up to +-1.7e308, denormal and overflowing diameters, radius ratios of 1e6, tight
 cell budgets, pair limits, both sinks, 2D and 3D. The corpus is committed; run this again
-only when the layout of fuzz_detect.c changes:  python3 tests/fuzz/make_seeds.py
+only when the layout of fuzz_detect.c (or fuzz_partition.c) changes:
+python3 tests/fuzz/make_seeds.py
 Files of the corpus this does not write are the fuzzers' findings, kept as regressions:
 step_to_front_2d (a time step that moves an element before the first of the last cell order;
 nbs__cs_rekey's merge lost it), step_wider_cells_3d (a step after one whose cells took a bit
-more of the key: nbs__cs_rekey sorted the old words by the new key's bits).
+more of the key: nbs__cs_rekey sorted the old words by the new key's bits);
+partition/regress_turned_axes_3d (a crowded core whose grid is stretched along z alone, so
+that the keys' rows lie along z: the crowded core's AVX-512 scatter stored the coordinates in
+the key's order of the axes, not the caller's).
 """
 import base64
 import os
@@ -307,6 +311,41 @@ R_EXT = ["", ".csv", ".txt", ".xyz", ".f64", ".bin", ".raw", ".vtk", ".vtp", ".v
          ".lammpstrj", ".liggghts", ".CSV", ".VTK", ".dat"]
 
 
+def partition_seeds():
+    """Seeds of fuzz_partition (the layout of fuzz_partition.c): scenes large enough for the
+    partitions, uniform and on the lattice, 2D and 3D, with and without radii, with outliers
+    far out that stretch the grid (the crowded core's partition) and just past the box."""
+
+    def scene(flags, n, frac, seed, groups):
+        b = bytes([flags]) + struct.pack("<HBI", (n - 1024) % 64513, frac, seed)
+        b += bytes([len(groups)])
+        for g in groups:
+            b += bytes(g)
+        return b
+
+    TD, RADII, CAND, STEP, LATTICE, CONSEC = 1, 2, 4, 128, 32, 64
+
+    def threads(t):
+        return (t - 1) << 3
+
+    # group: (axis | below << 2, distance, count - 1, gap index | chain axis << 2, where)
+    far = [(0, 0x80 | 20, 4, 1, 0), (1 | 4, 0x80 | 20, 4, 2, 0), (2, 0x80 | 20, 3, 0, 1)]
+    near = [(0, 10, 30, 2 | 1 << 2, 1), (0, 40, 20, 1 | 2 << 2, 3)]
+    seeds = {
+        "uniform_2d": scene(0, 60000, 0, 1, []),
+        "uniform_3d": scene(TD, 60000, 0, 2, []),
+        "lattice_radii_2d_step": scene(RADII | LATTICE | STEP | threads(2), 50000, 0, 3, []),
+        "core_3d": scene(TD, 60000, 0, 4, far),
+        "core_2d_radii": scene(RADII | threads(3), 60000, 0, 5, far[:2]),
+        "core_near_3d_step": scene(TD | STEP | threads(2), 60000, 0, 6, far + near),
+        "core_consecutive_3d": scene(TD | CONSEC | CAND, 40000, 0, 7, far),
+        "sparse_3d": scene(TD, 30000, 4, 8, far[:1]),
+    }
+    for name, b in seeds.items():
+        write("partition", name, b)
+    return len(seeds)
+
+
 def ropts(mode, dims="each", diameter=None, both=True, also_file=False, dump=0, columns=None,
           radius=None, diam=2.0, ext=""):
     b0 = R_MODE[mode] | R_DIMS[dims] << 3 | (32 if diameter else 0) | (64 if both else 0)
@@ -586,5 +625,5 @@ def reader_seeds():
 
 
 if __name__ == "__main__":
-    print(f"{detect_seeds()} detect seeds, {sort_seeds()} sort_pairs seeds, "
-          f"{reader_seeds()} readers seeds")
+    print(f"{detect_seeds()} detect seeds, {partition_seeds()} partition seeds, "
+          f"{sort_seeds()} sort_pairs seeds, {reader_seeds()} readers seeds")
