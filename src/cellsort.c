@@ -3473,9 +3473,10 @@ nbs__cs_core8_in(const nbs__cs_core8 *b, __m512i kk, int dim, __m512i *rel) {
   return in;
 }
 
-/* The 8 elements at x8 (dim constant where this is inlined): their coordinates to c[], their
- * whole keys to *kk (nbs__cs_key8_of), and which of them lie in the core box (the mask), with
- * their keys relative to it to *rel (nbs__cs_core8_in). */
+/* The 8 elements at x8 (dim constant where this is inlined): their coordinates to c[], in the
+ * key's order of the axes (c[a] the caller's coordinate kg->c[a], as nbs__cs_pos8 gives
+ * them), their whole keys to *kk (nbs__cs_key8_of), and which of them lie in the core box
+ * (the mask), with their keys relative to it to *rel (nbs__cs_core8_in). */
 static inline __attribute__((always_inline)) NBS__CS_AVX512_TARGET __mmask8
 nbs__cs_core8_next(const nbs__cs_keys8 *v, const nbs__cs_core8 *b, const double *x8, int dim,
                    __m512d c[3], __m512i *kk, __m512i *rel) {
