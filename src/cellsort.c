@@ -3919,6 +3919,33 @@ static inline uint64_t nbs__cs_core_whole(const nbs__cs_corebox *b, int sy, int 
          ((rel & m0) + b->lo[0]);
 }
 
+/* The lowest whole key, at or after the key rel relative to box b (shifted up by b->pad) in
+ * the order of the box's keys, whose fields lie within their ranges in the whole key (x below
+ * 2^sy, y below 2^(sz - sy), z below 2^(bits - sz)); UINT64_MAX where there is none. The box's
+ * sides are powers of two and may pass the grid's fields (a window near the top of a field
+ * rounded up), where nbs__cs_core_whole's fields would spill into the next: no element lies
+ * there, but a bucket's lowest key or the box's highest may. A position past x's range
+ * continues at the next row of the box, one past y's at the next layer. */
+static uint64_t nbs__cs_core_first(const nbs__cs_corebox *b, int sy, int sz, int bits,
+                                   uint64_t rel) {
+  rel >>= b->pad;
+  const uint64_t m0 = ((uint64_t)1 << b->cw[0]) - 1, m1 = ((uint64_t)1 << b->cw[1]) - 1;
+  uint64_t ox = rel & m0, oy = (rel >> b->cw[0]) & m1, oz = rel >> (b->cw[0] + b->cw[1]);
+  const uint64_t xmax = ((uint64_t)1 << sy) - 1, ymax = ((uint64_t)1 << (sz - sy)) - 1;
+  const uint64_t zmax = bits > sz ? ((uint64_t)1 << (bits - sz)) - 1 : 0;
+  if (b->lo[0] + ox > xmax) {
+    ox = 0;
+    oy++;
+  }
+  if (oy > m1 || b->lo[1] + oy > ymax) {
+    ox = 0;
+    oy = 0;
+    oz++;
+  }
+  if (oz >> b->cw[2] || b->lo[2] + oz > zmax) return UINT64_MAX;
+  return (b->lo[2] + oz) << sz | (b->lo[1] + oy) << sy | (b->lo[0] + ox);
+}
+
 /* Outlier kk (a whole key outside box b) counted in o[]: o[0] where its key is below the
  * box's lowest, o[2] above its highest, else o[1] and b->between[u], u the bucket whose range
  * holds it: the number of buckets past the first whose lowest key is below it (no core key is
@@ -4504,15 +4531,26 @@ static bool nbs__cs_core_part(const nbs__cs *c, const nbs__run *run, const nbs__
   if (!nbs__radix_top_first(n, dg)) return false;
   box.pad = dg.passes * dg.width - cb;
   if (cb + box.pad + eb > 62) return false;
+  /* the whole keys of the box's lowest and highest positions within the fields' ranges
+   * (nbs__cs_core_first), and of each bucket's lowest: no core key lies outside them */
   box.wmin = nbs__cs_core_whole(&box, kg->sy, kg->sz, 0);
-  box.wmax = nbs__cs_core_whole(&box, kg->sy, kg->sz, (((uint64_t)1 << cb) - 1) << box.pad);
+  {
+    uint64_t hi[3];
+    const uint64_t fmax[3] = {((uint64_t)1 << kg->sy) - 1, ((uint64_t)1 << (kg->sz - kg->sy)) - 1,
+                              bits > kg->sz ? ((uint64_t)1 << (bits - kg->sz)) - 1 : 0};
+    for (int a = 0; a < 3; a++) {
+      hi[a] = box.lo[a] + (((uint64_t)1 << box.cw[a]) - 1);
+      if (hi[a] > fmax[a]) hi[a] = fmax[a];
+    }
+    box.wmax = hi[2] << kg->sz | hi[1] << kg->sy | hi[0];
+  }
   const size_t B = dg.buckets;
   const int kshift = (dg.passes - 1) * dg.width;
   const uint64_t dmask = B - 1;
   uint64_t bound[(size_t)1 << NBS__RADIX_BITS];
   uint32_t between[(size_t)1 << NBS__RADIX_BITS], mfrom[((size_t)1 << NBS__RADIX_BITS) + 1];
   for (size_t b = 0; b < B; b++) {
-    bound[b] = nbs__cs_core_whole(&box, kg->sy, kg->sz, (uint64_t)b << kshift);
+    bound[b] = nbs__cs_core_first(&box, kg->sy, kg->sz, bits, (uint64_t)b << kshift);
     between[b] = 0;
   }
   box.bound = bound;

@@ -14,7 +14,9 @@ nbs__cs_rekey's merge lost it), step_wider_cells_3d (a step after one whose cell
 more of the key: nbs__cs_rekey sorted the old words by the new key's bits);
 partition/regress_turned_axes_3d (a crowded core whose grid is stretched along z alone, so
 that the keys' rows lie along z: the crowded core's AVX-512 scatter stored the coordinates in
-the key's order of the axes, not the caller's).
+the key's order of the axes, not the caller's); partition/regress_box_past_rows_3d (a core
+box whose rows passed the grid's 2^by: the whole key of its highest position spilled y into
+z, and an outlier between was put after every element).
 """
 import base64
 import os
