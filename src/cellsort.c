@@ -3919,6 +3919,13 @@ static inline uint64_t nbs__cs_core_whole(const nbs__cs_corebox *b, int sy, int 
          ((rel & m0) + b->lo[0]);
 }
 
+/* The highest value of each field of a whole key of `bits` bits, its fields at 0, sy, sz. */
+static void nbs__cs_field_max(int sy, int sz, int bits, uint64_t fmax[3]) {
+  fmax[0] = ((uint64_t)1 << sy) - 1;
+  fmax[1] = ((uint64_t)1 << (sz - sy)) - 1;
+  fmax[2] = bits > sz ? ((uint64_t)1 << (bits - sz)) - 1 : 0;
+}
+
 /* The lowest whole key, at or after the key rel relative to box b (shifted up by b->pad) in
  * the order of the box's keys, whose fields lie within their ranges in the whole key (x below
  * 2^sy, y below 2^(sz - sy), z below 2^(bits - sz)); UINT64_MAX where there is none. The box's
@@ -3931,18 +3938,18 @@ static uint64_t nbs__cs_core_first(const nbs__cs_corebox *b, int sy, int sz, int
   rel >>= b->pad;
   const uint64_t m0 = ((uint64_t)1 << b->cw[0]) - 1, m1 = ((uint64_t)1 << b->cw[1]) - 1;
   uint64_t ox = rel & m0, oy = (rel >> b->cw[0]) & m1, oz = rel >> (b->cw[0] + b->cw[1]);
-  const uint64_t xmax = ((uint64_t)1 << sy) - 1, ymax = ((uint64_t)1 << (sz - sy)) - 1;
-  const uint64_t zmax = bits > sz ? ((uint64_t)1 << (bits - sz)) - 1 : 0;
-  if (b->lo[0] + ox > xmax) {
+  uint64_t fmax[3];
+  nbs__cs_field_max(sy, sz, bits, fmax);
+  if (b->lo[0] + ox > fmax[0]) {
     ox = 0;
     oy++;
   }
-  if (oy > m1 || b->lo[1] + oy > ymax) {
+  if (oy > m1 || b->lo[1] + oy > fmax[1]) {
     ox = 0;
     oy = 0;
     oz++;
   }
-  if (oz >> b->cw[2] || b->lo[2] + oz > zmax) return UINT64_MAX;
+  if (oz >> b->cw[2] || b->lo[2] + oz > fmax[2]) return UINT64_MAX;
   return (b->lo[2] + oz) << sz | (b->lo[1] + oy) << sy | (b->lo[0] + ox);
 }
 
@@ -4535,9 +4542,8 @@ static bool nbs__cs_core_part(const nbs__cs *c, const nbs__run *run, const nbs__
    * (nbs__cs_core_first), and of each bucket's lowest: no core key lies outside them */
   box.wmin = nbs__cs_core_whole(&box, kg->sy, kg->sz, 0);
   {
-    uint64_t hi[3];
-    const uint64_t fmax[3] = {((uint64_t)1 << kg->sy) - 1, ((uint64_t)1 << (kg->sz - kg->sy)) - 1,
-                              bits > kg->sz ? ((uint64_t)1 << (bits - kg->sz)) - 1 : 0};
+    uint64_t hi[3], fmax[3];
+    nbs__cs_field_max(kg->sy, kg->sz, bits, fmax);
     for (int a = 0; a < 3; a++) {
       hi[a] = box.lo[a] + (((uint64_t)1 << box.cw[a]) - 1);
       if (hi[a] > fmax[a]) hi[a] = fmax[a];

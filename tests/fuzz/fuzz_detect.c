@@ -43,6 +43,7 @@
  * N is at most 64, so one input runs in well under a millisecond of library time.
  */
 #include "internal.h"
+#include "fz_bytes.h"
 
 #include <float.h>
 #include <math.h>
@@ -62,24 +63,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 #define FZ_MAX_N 64
 #define FZ_MAX_PAIRS (FZ_MAX_N * (FZ_MAX_N - 1) / 2)
 
-/* ---- reading the bytes ------------------------------------------------------------------ */
-
-typedef struct fz_reader {
-  const uint8_t *p;
-  size_t left;
-} fz_reader;
-
-static unsigned fz_u8(fz_reader *r) {
-  if (r->left == 0) return 0;
-  r->left--;
-  return *r->p++;
-}
-
-static unsigned fz_u16(fz_reader *r) {
-  unsigned lo = fz_u8(r);
-  unsigned hi = fz_u8(r);
-  return lo | hi << 8;
-}
+/* ---- reading the bytes (fz_bytes.h) ------------------------------------------------------ */
 
 static double fz_raw(fz_reader *r) {
   uint64_t b = 0;

@@ -31,6 +31,7 @@
  */
 #define _POSIX_C_SOURCE 200809L /* setenv */
 #include "internal.h"
+#include "fz_bytes.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -45,21 +46,6 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 #define FZ_DIRECT_MAX 2048
 #endif
 
-typedef struct fz_reader {
-  const uint8_t *p;
-  size_t left;
-} fz_reader;
-
-static unsigned fz_u8(fz_reader *r) {
-  if (r->left == 0) return 0;
-  r->left--;
-  return *r->p++;
-}
-
-static unsigned fz_u16(fz_reader *r) {
-  const unsigned lo = fz_u8(r);
-  return lo | fz_u8(r) << 8;
-}
 
 static uint64_t fz_next(uint64_t *s) {
   uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
