@@ -525,19 +525,49 @@ static void test_partition(void) {
  * whole keys are packed (35 bits), with outliers between whose keys lie a little above the
  * lowest of a bucket (of the test's scenes, only there can an outlier's key come within the
  * box's side of a bucket's lowest: the others' grids are too coarse for the sample to leave
- * such outliers out of the box). It fails when an outlier of any kind is put in the wrong
- * place or with the wrong coordinates, when a bucket's range is off by one place, when the
- * bucket search puts outliers up to 1000 above a bucket's lowest key in the bucket before,
- * or when the partition does not run (ctx->cs_partitioned) or finds no outliers. */
+ * such outliers out of the box); and a 3D scene of 40000 whose core box passes the top of
+ * the whole key's y field, with an outlier between in the box's top layer. It fails when an
+ * outlier of any kind is put in the wrong place or with the wrong coordinates, when a
+ * bucket's range is off by one place, when the bucket search puts outliers up to 1000 above a
+ * bucket's lowest key in the bucket before, when the box's highest key is taken past the
+ * whole key's fields, or when the partition does not run (ctx->cs_partitioned) or finds no
+ * outliers. */
 static void test_core_partition(void) {
   const int counts[] = {1, 2, 3};
-  for (int sc = 0; sc < 11; sc++) {
-    const int dim = sc == 8 || sc == 9 ? 3 : sc == 10 ? 2 : 2 + sc % 2;
-    const double box = dim == 3 ? 40.0 : 250.0, far = 1e6;
-    scene s = det_scene(sc % 4 < 2 ? DET_UNIFORM : DET_RADII, dim, 60000, box, 0.0, 41 + sc);
+  for (int sc = 0; sc < 12; sc++) {
+    const int dim = sc == 8 || sc == 9 || sc == 11 ? 3 : sc == 10 ? 2 : 2 + sc % 2;
+    const double box = sc == 11 ? 31.5 : dim == 3 ? 40.0 : 250.0, far = 1e6;
+    scene s = det_scene(sc % 4 < 2 ? DET_UNIFORM : DET_RADII, dim, sc == 11 ? 40000 : 60000, box,
+                        0.0, 41 + sc);
     int64_t outliers = 0;
     uint64_t rng = 71 + (uint64_t)sc;
-    for (int64_t k = 0; k < s.n; k++) {
+    if (sc == 11) {
+      /* a core box whose rows pass the top of the whole key's y field (bug 2 of e9600c4's
+       * fuzz target, fixed in 8b54712): the core stretched to 1.2 box edges on x, whose 38
+       * rows take a field of 64 and a box of rows 1 to 64 (past the field's 63); moved up 0.6
+       * on y, whose box is then layers 2 to 33 (32 of them, the last odd: where the box's
+       * highest key was taken past the fields, y's 64 spilled into z's lowest bit, which the
+       * odd layer already had, and the key came out as that layer's row 0, below its core
+       * elements); 42 outliers in a chain at z = 513 box edges (the rows then lie along z);
+       * and a chain of 430 at x = 0, z just past the core's top, 0.3 apart up y to 129 (y's
+       * field then 256 layers), most of them outliers, one an outlier between in the box's
+       * top layer, whose key was taken for above the box's highest: it was put after every
+       * element (the three detections in candidate mode differ) */
+      for (int64_t k = 0; k < s.n; k++) {
+        s.coords[k * 3] *= 1.2;
+        s.coords[k * 3 + 1] += 0.6;
+      }
+      for (int m = 0; m < 42; m++) {
+        double *p = s.coords + (1000 + m) * 3;
+        p[0] = 0.0, p[1] = 0.95 * m, p[2] = 513.0 * box;
+      }
+      for (int m = 0; m < 430; m++) {
+        double *p = s.coords + (5000 + m) * 3;
+        p[0] = 0.0, p[1] = 0.3 * m, p[2] = box + 1.5;
+      }
+      outliers = 42;
+    }
+    for (int64_t k = 0; sc < 11 && k < s.n; k++) {
       double *p = s.coords + k * dim;
       if (sc >= 9) {
         /* turned: outliers 4e7 diameters below on the last axis only, which then has the
@@ -625,9 +655,10 @@ static void test_core_partition(void) {
                   (long long)part->cs_outliers, (long long)outliers);
         ASSERT_OK(detect_raw(sort, &s, NBS_CELLSORT, (nbs_mode)mode, &b));
         CHECK_MSG(!sort->cs_partitioned, "scene %d: NBS_PARTITION=never partitioned", sc);
-        /* (scene 8's sort takes the whole keys, packed words made with the keys' pass) */
-        CHECK_MSG(sort->cs_outliers == (sc == 8 ? -1 : part->cs_outliers), "scene %d: %lld "
-                  "outliers, the sort %lld", sc, (long long)part->cs_outliers,
+        /* (scenes 8's and 11's sorts take the whole keys, packed words made with the keys'
+         * pass) */
+        CHECK_MSG(sort->cs_outliers == (sc == 8 || sc == 11 ? -1 : part->cs_outliers),
+                  "scene %d: %lld outliers, the sort %lld", sc, (long long)part->cs_outliers,
                   (long long)sort->cs_outliers);
         CHECK_MSG(a.count > (size_t)s.n / 4, "scene %d: only %zu pairs", sc, a.count);
         CHECK_MSG(same_bytes(&a, &b), "scene %d (%dD) mode %d, %d threads: the core's "
