@@ -4220,7 +4220,20 @@ static void nbs__cs_part_scatter512(const nbs__cs_keying *kg, const double *x, c
  * (nbs__radix_local, with `other` for scratch), the elements go back into the words and each
  * one's new place to rank[], and each coordinate array is permuted after them through
  * `other`: read in order (it comes from memory), each entry written to its rank (in the
- * cache); reading it at random instead took a fifth longer (3D, N = 1e7, perf). */
+ * cache); reading it at random instead took a fifth longer (3D, N = 1e7, perf).
+ * Tried and left out (Intel Xeon guest, NBS_PARTITION=always, interleaved with the build
+ * before, preparation in ns per element, medians of 8-12 processes; the same bytes):
+ *  - the coordinates carried through the two passes with the words, in place of the
+ *    elements' places, their ranks and the permutation (S + 1 arrays scattered per pass
+ *    where the permutation scatters S once): 2D N = 1e6 24.3 -> 22.9, but 3D 24.9 -> 26.4,
+ *    1e7 3D 37.0 -> 51.5 (buckets of 20,000 elements, 1.3 MB with their scratch), 2D 35.8
+ *    -> 34.9 (min 29.3 -> 33.9); it also needs (1 + S) 8 bytes of scratch per element of
+ *    the largest bucket, 16 now, which test_determinism's 3D strip with three threads then
+ *    lacks;
+ *  - the next bucket's lines asked for (prefetched) while this one is sorted, a line per 8
+ *    entries of each array in step with this bucket's loops over the same array: 2D 1e6
+ *    31.4 -> 31.9, 3D 35.4 -> 34.4, 1e7 2D 27.8 -> 30.6, 3D 36.6 -> 33.3: no gain beyond
+ *    the noise (the processor's own prefetcher follows these streams). */
 static void nbs__cs_part_bucket(const nbs__cs_dst *d, uint32_t s0, int32_t len, int eb,
                                 nbs__digits dg, uint32_t *h, uint64_t *other, int32_t *gid,
                                 int32_t *rank) {
