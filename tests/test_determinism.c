@@ -567,6 +567,7 @@ static void test_core_partition(void) {
       }
       outliers = 42;
     }
+    /* the other scenes' outliers, placed element by element (scene 11's are above) */
     for (int64_t k = 0; sc < 11 && k < s.n; k++) {
       double *p = s.coords + k * dim;
       if (sc >= 9) {
