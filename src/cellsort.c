@@ -4568,6 +4568,13 @@ static bool nbs__cs_core_part(const nbs__cs *c, const nbs__run *run, const nbs__
   const uint64_t dmask = B - 1;
   uint64_t bound[(size_t)1 << NBS__RADIX_BITS];
   uint32_t between[(size_t)1 << NBS__RADIX_BITS], mfrom[((size_t)1 << NBS__RADIX_BITS) + 1];
+  /* (Of the two, only the box's highest key changes the output when taken past the fields:
+   * test_determinism core_partition, scene 11. A bucket's lowest taken past them spills a
+   * field into the next, so it is below the true one (the next row or layer of the box) and
+   * above every key of the buckets before; the keys between the two are outliers that come
+   * after the buckets before and before this one's core keys, wherever they are counted, so
+   * counted in this bucket and not the one before they land in the same places. The fields'
+   * ranges are kept for the bounds too, so that each is a key the order can hold.) */
   for (size_t b = 0; b < B; b++) {
     bound[b] = nbs__cs_core_first(&box, kg->sy, kg->sz, bits, (uint64_t)b << kshift);
     between[b] = 0;
