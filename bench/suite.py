@@ -190,6 +190,21 @@ class Suite:
                     u, v = float(r["seconds"]), float(twin["seconds"])
                     if max(u, v) > DISTURBED * min(u, v):
                         out.append(x)
+            # Likewise the rows of one thread count whose algorithms ran the same code (auto
+            # runs cellsort) in the same processes: the second core taken from all of one
+            # algorithm's rounds and from none of the other's. Seen once (2D, N = 1e5, S/D
+            # 10, 2026-11-29): cellsort with two threads 11.8 ns per element in each of its
+            # three processes, as slow as one thread, auto in the same processes 6.3; the
+            # case again, 6.2 and 6.3.
+            for t in counts[1:] if talgs else []:
+                same = {}
+                for x in talgs:
+                    r = best.get(f"nbs-{x}-{t}t")
+                    if r and r.get("status") == "ok" and r.get("ran"):
+                        same.setdefault(r["ran"], []).append((float(r["seconds"]), x))
+                for rows in same.values():
+                    if len(rows) > 1 and max(rows)[0] > DISTURBED * min(rows)[0]:
+                        out.append(f"{max(rows)[1]}-{t}t")
             return out
 
         retried = 0
@@ -773,31 +788,46 @@ PROBE_N = 200000  # elements of the cores' probe (Suite.probe_cores)
 def consistency(rows):
     """The same configuration is measured twice in a run: nbs-auto and nbs-cellsort on their
     own, and again (-1t) alternated with their two-thread runs, all on one thread; so is
-    nbs-nbs (--twin-algorithms), whose rows targets read too. Where the two differ by more
-    than DISTURBED, the machine was disturbed during one of them (this VM's neighbours come
-    and go), and every target read from those rows is suspect: the lines below say which, so
-    that a reader does not take noise for a result."""
-    ok = {(r["scene"], r["dim"], r["order"], r["N"], r["tool"]): r for r in rows
-          if r["status"] == "ok" and r["ns_per_element"] and not r["spacing"]}
+    nbs-nbs (--twin-algorithms), whose rows targets read too. With more threads, auto and
+    cellsort run the same code (auto ran cellsort) in the same processes. Where two such rows
+    differ by more than DISTURBED, the machine was disturbed during one of them (this VM's
+    neighbours come and go), and every target read from those rows is suspect: the lines below
+    say which, so that a reader does not take noise for a result."""
+    ok = {(r["scene"], r["dim"], r["order"], r["N"], r["spacing"], r["tool"]): r for r in rows
+          if r["status"] == "ok" and r["ns_per_element"]}
+
+    def case(scene, dim, order, n, spacing):
+        return f"{scene} {dim}D {order} N={fmt_n(int(n))}" + (f" S/D={spacing}" if spacing else "")
+
     bad = []
-    for (scene, dim, order, n, tool), r in sorted(ok.items()):
-        twin_row = tool.endswith("-1t")
-        if not tool.startswith("nbs-") or twin_row or r.get("threads") not in ("", "1"):
+    same = {}
+    for (scene, dim, order, n, spacing, tool), r in sorted(ok.items()):
+        if not tool.startswith("nbs-") or tool.endswith("-1t"):
             continue
-        twin = ok.get((scene, dim, order, n, tool + "-1t"))
+        if r.get("threads") not in ("", "1"):
+            if "-steps" not in tool and r.get("ran"):
+                same.setdefault((scene, dim, order, n, spacing, r["threads"], r["ran"]),
+                                []).append((nsel(r), tool))
+            continue
+        twin = ok.get((scene, dim, order, n, spacing, tool + "-1t"))
         if not twin:
             continue
         a, b = nsel(r), nsel(twin)
         if max(a, b) > DISTURBED * min(a, b):
-            bad.append(f"| {scene} {dim}D {order} N={fmt_n(int(n))} | {tool} {a:.1f} ns, "
+            bad.append(f"| {case(scene, dim, order, n, spacing)} | {tool} {a:.1f} ns, "
                        f"{tool}-1t {b:.1f} ns | x{max(a, b) / min(a, b):.2f} |")
+    for (scene, dim, order, n, spacing, threads, ran), got in sorted(same.items()):
+        (a, ta), (b, tb) = min(got), max(got)
+        if len(got) > 1 and b > DISTURBED * a:
+            bad.append(f"| {case(scene, dim, order, n, spacing)} | {ta} {a:.1f} ns, {tb} "
+                       f"{b:.1f} ns (both ran {ran}) | x{b / a:.2f} |")
     if not bad:
         return []
     return ["", "### Disturbed rows\n",
-            f"One thread, the same code and scene, measured twice in this run, more than "
-            f"{DISTURBED:.2f}x apart: the machine was disturbed, and targets read from these "
-            "rows are not results.\n", "| case | the two measurements | apart |",
-            "|---|---|---|", *bad]
+            f"The same code and scene, measured twice in this run (one thread; or with threads, "
+            f"auto and the algorithm it ran), more than {DISTURBED:.2f}x apart: the machine was "
+            "disturbed, and targets read from these rows are not results.\n",
+            "| case | the two measurements | apart |", "|---|---|---|", *bad]
 
 
 STYLE = {"nbs-auto": ("C0", "o"), "nbs-auto-2t": ("C0", "1"), "nbs-auto-steps": ("navy", "+"),
