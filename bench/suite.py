@@ -196,7 +196,7 @@ class Suite:
             # 10, 2026-11-29): cellsort with two threads 11.8 ns per element in each of its
             # three processes, as slow as one thread, auto in the same processes 6.3; the
             # case again, 6.2 and 6.3.
-            for t in counts[1:] if talgs else []:
+            for t in counts[1:]:
                 same = {}
                 for x in talgs:
                     r = best.get(f"nbs-{x}-{t}t")
