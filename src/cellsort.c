@@ -27,7 +27,10 @@
  *      random access. Where the input is larger than 1 GiB (3D N = 4.5e7, 2D 6.7e7),
  *      steps 1-3 are instead one partition by the top digit that carries the coordinates
  *      along in whole lines, then each bucket put in order in cache (nbs__cs_partition:
- *      N = 1e8, 3D 67.1 -> 62.2 ns per element, 2D 35.2 -> 30.6); from 8 MiB to 1 GiB,
+ *      3D N = 1e8, Zen 4, one thread, 52.8-78.6 -> 43.8-45.7 ns per element; until its top
+ *      digit was widened, nbs__cs_part_digits, it did not run there, its buckets too large,
+ *      and the figures earlier notes gave for 1e8 were the sort and the gather's both ways,
+ *      whose random reads of 2.4 GB miss the TLB too); from 8 MiB to 1 GiB,
  *      which of the two is faster depends on the machine's memory, and the context times
  *      its first detections both ways and keeps the faster (nbs__cs_way: on an Intel guest
  *      whose random reads of memory cost 4x the AMD instances', the partition, 3D N = 1e6
@@ -508,6 +511,58 @@ static bool nbs__share_next(nbs__share *s, int t, int *stage, uint32_t grain, bo
  * histograms then cost at most one step per key and pass). */
 static bool nbs__radix_top_first(int32_t n, nbs__digits dg) {
   return dg.passes >= 2 && (uint64_t)n >= (uint64_t)dg.buckets * dg.buckets;
+}
+
+/* The partition's digits (nbs__cs_partition) for n keys of `bits` bits: its top digit, the
+ * key's bits from `shift` up, in `buckets` buckets, and the digits below it, `lo`, which each
+ * bucket is sorted by in the cache (lo.passes - 1 passes of lo.width bits from the bottom;
+ * lo.passes counts the top digit too). They are the radix sort's (nbs__radix_digits), all of
+ * one width, unless that leaves the top digit too narrow for the input: the even split puts
+ * what the key's bits do not fill in the top digit (30 bits: 8, 8, 8 and 6), and from 3D
+ * N = 1.7e7 or so (256 cells per axis) a bucket of its 64 would hold 1.5% of the elements,
+ * 1.6 million keys at N = 1e8, far past NBS__RADIX_LOCAL_MAX, and the partition gave way to
+ * the sort and the gather. There (or always, with `wide`: NBS_PARTITION=wide, for the tests)
+ * the top digit takes as many bits as the keys allow, at most NBS__RADIX_BITS (there must be
+ * as many keys as the square of its buckets), and the bits below it as many passes as
+ * before, of the width that covers them (3D N = 1e8, 30 bits: 9 and 7, 7, 7, buckets of a
+ * layer of cells, 212,000 keys; 2D, 31 bits: 9 and 8, 8, 8). Where the widths do not add
+ * up, the last of those passes reaches into the top digit, which every key of a bucket
+ * shares: it moves nothing there. */
+typedef struct nbs__cs_pdigits {
+  nbs__digits lo;
+  int shift;
+  size_t buckets;
+  bool wide; /* the top digit widened */
+} nbs__cs_pdigits;
+
+static nbs__cs_pdigits nbs__cs_part_digits(int32_t n, int bits, bool wide) {
+  const nbs__digits dg = nbs__radix_digits(bits);
+  nbs__cs_pdigits pd = {dg, (dg.passes - 1) * dg.width, dg.buckets, false};
+  if (dg.passes < 2) return pd;
+  const int top = bits - pd.shift; /* the bits the even split leaves the top digit */
+  int tw = NBS__RADIX_BITS;
+  while (tw > top && (uint64_t)n < (uint64_t)1 << (2 * tw)) tw--;
+  if (tw > top && (wide || ((uint64_t)n >> top) > NBS__RADIX_LOCAL_MAX)) {
+    const int below = dg.passes - 1;
+    pd.shift = bits - tw;
+    pd.buckets = (size_t)1 << tw;
+    /* at most the even split's width: shift is below its (passes - 1) * width */
+    pd.lo.width = (pd.shift + below - 1) / below;
+    pd.lo.buckets = (size_t)1 << pd.lo.width;
+    pd.wide = true;
+  }
+  return pd;
+}
+
+/* Whether the partition's largest bucket, `most` of n keys, is sorted in the cache: at most
+ * NBS__RADIX_LOCAL_MAX keys, or, where there are more elements than the buckets hold at that,
+ * at most 1/128 of them. A larger bucket (3D N = 1e8: 212,000 keys, 10 MB with its
+ * coordinates and scratch) is sorted in the last-level cache, not in the core's, and is still
+ * faster than the sort and the gather, whose random reads of a 2.4 GB input also miss the TLB
+ * (see nbs__cs_partition); a bucket of more than 1/128 of them (a clustered scene) would leave
+ * a thread with most of the work, since each bucket is sorted by the thread it starts in. */
+static bool nbs__cs_part_fits(int32_t n, uint32_t most) {
+  return most <= NBS__RADIX_LOCAL_MAX || most <= (uint32_t)n / 128;
 }
 
 /* The second half of a stable counting pass of the digit at `shift` (dg's width) over n keys,
@@ -1387,17 +1442,27 @@ int nbs__cellsort_simd(void) {
  * only beyond (interleaved, ns per element, one thread, random order, partition against
  * gather: 3D N = 1e6, 24 MB, 37.9 against 32.5; 1e7, 240 MB, 39.0 / 35.5, two threads 20.9
  * / 19.0, sorted order 37.8 / 32.7; 2e7 43.3 / 41.3; 3e7, 720 MB, 44.0 / 44.0; 1e8, 2.4 GB,
- * 62.2 / 67.1; 2D 1e7, 160 MB, 22.7 / 21.6; 3e7 29.4 / 26.8; 1e8, 1.6 GB, 30.6 / 35.2). Far
+ * 62.2 / 67.1; 2D 1e7, 160 MB, 22.7 / 21.6; 3e7 29.4 / 26.8; 1e8, 1.6 GB, 30.6 / 35.2; but
+ * the partition then gave way to the sort wherever the even split of the key's bits left its
+ * top digit too narrow, 3D from about N = 1.7e7, 30-bit keys, so at 3D 3e7 and 1e8 both
+ * columns were the sort and the gather: see nbs__cs_part_digits). Far
  * beyond, the gather's random reads miss the TLB as well as the caches. A constant, not the
  * machine's cache size, so that the path, and so the time, does not depend on what the C
  * library reports (glibc's sysconf gave 320 MiB of L3 on the benchmark machine, which has
  * 32). The environment variable NBS_PARTITION, read when a context is created, says
- * "always" or "never" instead, for tests and comparisons. */
+ * "always" or "never" instead, for tests and comparisons ("wide": always, with the top digit
+ * widened wherever the keys allow, nbs__cs_part_digits). */
 size_t nbs__cellsort_partition_min(void) {
   const char *e = getenv("NBS_PARTITION");
-  if (e && strcmp(e, "always") == 0) return 0;
+  if (e && (strcmp(e, "always") == 0 || strcmp(e, "wide") == 0)) return 0;
   if (e && strcmp(e, "never") == 0) return SIZE_MAX;
   return (size_t)1 << 30;
+}
+
+/* Whether NBS_PARTITION says "wide" (nbs__cellsort_partition_min). */
+bool nbs__cellsort_partition_wide(void) {
+  const char *e = getenv("NBS_PARTITION");
+  return e && strcmp(e, "wide") == 0;
 }
 
 /* Whether a context measures which way its detections from scratch take below that size
@@ -4394,11 +4459,14 @@ static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__
                               int eb, nbs__digits dg, uint32_t *hist, bool counted, int threads,
                               char *spare, size_t spare_bytes) {
   const int32_t n = c->n;
-  const size_t B = dg.buckets;
+  const nbs__cs_pdigits pd = nbs__cs_part_digits(n, dg.bits, run->ctx->cs_part_wide);
+  const size_t B = pd.buckets;
   const nbs__cs_dst d = nbs__cs_dst_of(c);
   const size_t wc = B * (size_t)(1 + d.S) * NBS__CS_LINE * sizeof(uint64_t);
-  if (!nbs__radix_top_first(n, dg) || (size_t)threads * wc > spare_bytes) return false;
-  const int kshift = (dg.passes - 1) * dg.width;
+  if (dg.passes < 2 || (uint64_t)n < (uint64_t)B * B || (size_t)threads * wc > spare_bytes) {
+    return false;
+  }
+  const int kshift = pd.shift;
   const uint64_t dmask = B - 1;
   uint32_t top[((size_t)1 << NBS__RADIX_BITS) + 1];
   uint32_t most = 0;
@@ -4427,7 +4495,7 @@ static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__
       /* each part's scratch for a bucket: the words' sort and the coordinates' permutation
        * (8 bytes per entry), the elements and their ranks (4 each), on a line's boundary */
       per = ((size_t)most * 16 + 63) & ~(size_t)63;
-      fits = most <= NBS__RADIX_LOCAL_MAX && (size_t)threads * per <= spare_bytes;
+      fits = nbs__cs_part_fits(n, most) && (size_t)threads * per <= spare_bytes;
     }
     if (fits) {
       NBS__PARTS(t, threads) {
@@ -4440,11 +4508,12 @@ static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__
 #pragma omp barrier
 #endif
       NBS__PARTS(t, threads) {
-        nbs__cs_part_buckets(c, run, &d, t, threads, top, B, eb, dg, hist + (size_t)t * B, most,
-                             spare + (size_t)t * per, NULL, kg, NULL, NULL);
+        nbs__cs_part_buckets(c, run, &d, t, threads, top, B, eb, pd.lo, hist + (size_t)t * B,
+                             most, spare + (size_t)t * per, NULL, kg, NULL, NULL);
       }
     }
   }
+  run->ctx->cs_part_widened = fits && pd.wide;
   return fits;
 }
 
@@ -4718,6 +4787,7 @@ static void nbs__cs_sort_gather(const nbs__cs *c, nbs__run *run, const nbs__cs_k
   /* 1-3 at once, where the context has measured the partition faster (nbs__cs_way): by the
    * crowded core's keys, or by the whole keys (where they are packed, and also where the
    * input is larger than 1 GiB) */
+  run->ctx->cs_part_widened = false;
   bool parted = part && core &&
                 nbs__cs_core_part(c, run, kg, eb, bits, hist, threads, spare, spare_bytes);
   const bool counted = part && !parted && run->precounts && eb == run->pre_eb &&
@@ -5169,9 +5239,10 @@ bool nbs__cellsort_fresh(nbs__run *run, const nbs_input *in, nbs_algorithm asked
    * interleaved with 85a4f1d, input and preparation in ns per element, medians: 3D 41.4 ->
    * 35.4, 2D 43.0 -> 35.8 of five; two threads, 3D preparation 19.9-21.9 -> 16.6-18.7; the
    * same bytes) */
-  const nbs__digits dg = nbs__radix_digits(plan.bits);
-  const bool tally =
-      plan.packed && nbs__cs_way(run, threads) == 2 && nbs__radix_top_first(n, dg);
+  const nbs__cs_pdigits pd = nbs__cs_part_digits(n, plan.bits, ctx->cs_part_wide);
+  const bool tally = plan.packed && nbs__cs_way(run, threads) == 2 &&
+                     nbs__radix_digits(plan.bits).passes >= 2 &&
+                     (uint64_t)n >= (uint64_t)pd.buckets * pd.buckets;
 
   /* step 1 where nbs__cs_sort_gather puts it; the order the block held is gone */
   run->order_dropped = order && !run->fresh;
@@ -5196,9 +5267,8 @@ bool nbs__cellsort_fresh(nbs__run *run, const nbs_input *in, nbs_algorithm asked
     kl.g = &g;
     nbs__cs_box *box = &boxes[t];
     nbs__cs_box_clear(box);
-    nbs__cs_tally ty = {hist + (size_t)t * dg.buckets, (dg.passes - 1) * dg.width,
-                        dg.buckets - 1};
-    if (tally) memset(ty.h, 0, dg.buckets * sizeof *ty.h);
+    nbs__cs_tally ty = {hist + (size_t)t * pd.buckets, pd.shift, pd.buckets - 1};
+    if (tally) memset(ty.h, 0, pd.buckets * sizeof *ty.h);
     bool in_box;
 #if NBS__CS_AVX512
     if (ctx->simd == NBS__SIMD_AVX512) {
@@ -5266,6 +5336,7 @@ nbs_status nbs__cellsort(nbs__run *run) {
   ctx->cs_kept_ok = false;
   ctx->cs_outliers = -1;
   ctx->cs_partitioned = false;
+  ctx->cs_part_widened = false;
   char *w = nbs__cs_base(ctx->work);
   nbs__cs c;
   c.run = run;

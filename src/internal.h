@@ -154,6 +154,10 @@ struct nbs_context {
    * not; read by the tests). */
   size_t cs_part_min;
   bool cs_partitioned;
+  /* the partition's top digit is widened wherever the keys allow (NBS_PARTITION=wide, for
+   * the tests; else only where the even split's buckets would be too large for a cache,
+   * nbs__cs_part_digits); cs_part_widened says whether the last partition widened it */
+  bool cs_part_wide, cs_part_widened;
   /* Between NBS__CS_TUNE_MIN bytes and cs_part_min, which of the two ways a detection from
    * scratch takes is measured (nbs__cs_way): cs_tune says so (NBS_PARTITION unset); the
    * measurements are of inputs of class cs_tune_class (dimension, threads and the power of
@@ -470,6 +474,7 @@ nbs__twice4(const int32_t *p) {
 }
 #endif
 size_t nbs__cellsort_partition_min(void);
+bool nbs__cellsort_partition_wide(void);
 bool nbs__cellsort_tune(void);
 /* After a detection that succeeded: where it was one of cellsort's timed tries (run->cs_try),
  * its time from its start to its search, `seconds`, is recorded (nbs_context.cs_tune). */

@@ -454,9 +454,13 @@ static bool partition_contexts(int threads, nbs_context **part, nbs_context **so
  * digits of at most 7 bits (the partition needs as many elements as the square of the
  * buckets); the partition must have run on each (ctx->cs_partitioned). And a sheet: 60000
  * of 70000 elements in one layer, whose top digit they share, so that the partition, having
- * counted the digits, must give way to the sort (a bucket too large for a cache). */
+ * counted the digits, must give way to the sort (a bucket too large for a cache). Each is
+ * also detected with the partition's top digit widened as far as the keys allow
+ * (NBS_PARTITION=wide; by default only where the even split's buckets would be too large
+ * for a cache, 3D N > 1.7e7 or so), whose bytes must be the sort's too. */
 static void test_partition(void) {
   const int counts[] = {1, 2, 3};
+  bool widened[11] = {false};
   for (int sc = 0; sc < 11; sc++) {
     const int dim = sc == 8 || sc == 9 ? 3 : sc == 10 ? 2 : 2 + sc % 2;
     scene s;
@@ -483,12 +487,30 @@ static void test_partition(void) {
     const bool expect = sc < 8;
     for (size_t t = 0; t < sizeof counts / sizeof *counts; t++) {
       for (int mode = 0; mode < 2; mode++) {
-        nbs_context *part, *sort;
+        nbs_context *part, *sort, *wide;
         ASSERT_TRUE(partition_contexts(counts[t], &part, &sort));
-        pair_list a, b, again;
+        pair_list a, b, again, w;
         ASSERT_OK(detect_raw(part, &s, NBS_CELLSORT, (nbs_mode)mode, &a));
         const bool took = part->cs_partitioned;
+        CHECK_MSG(!part->cs_part_widened, "scene %d: the partition's top digit widened for "
+                  "%d elements", sc, (int)s.n);
         ASSERT_OK(detect_raw(sort, &s, NBS_CELLSORT, (nbs_mode)mode, &b));
+        /* the top digit widened (NBS_PARTITION=wide): the same bytes */
+        nbs_context_def cdef = nbs_default_context_def();
+        cdef.threads = counts[t];
+        ASSERT_TRUE(setenv("NBS_PARTITION", "wide", 1) == 0);
+        const nbs_status st = nbs_context_create(&cdef, &wide);
+        unsetenv("NBS_PARTITION");
+        ASSERT_STATUS(st, NBS_OK);
+        ASSERT_OK(detect_raw(wide, &s, NBS_CELLSORT, (nbs_mode)mode, &w));
+        CHECK_MSG(wide->cs_partitioned == expect, "scene %d (%dD), %d threads, NBS_PARTITION="
+                  "wide: the partition %s", sc, dim, counts[t],
+                  wide->cs_partitioned ? "ran" : "did not run");
+        if (wide->cs_part_widened) widened[sc] = true;
+        CHECK_MSG(same_bytes(&w, &b), "scene %d (%dD) mode %d, %d threads: the partition with "
+                  "its top digit widened differs from the sort", sc, dim, mode, counts[t]);
+        pair_list_free(&w);
+        nbs_context_destroy(wide);
         CHECK_MSG(!sort->cs_partitioned, "scene %d: NBS_PARTITION=never partitioned", sc);
         ASSERT_OK(detect_raw(part, &s, NBS_CELLSORT, (nbs_mode)mode, &again));
         CHECK_MSG(took == expect, "scene %d (%dD), %d threads: the partition %s", sc, dim,
@@ -507,6 +529,14 @@ static void test_partition(void) {
     }
     scene_free(&s);
   }
+  /* the widened top digit ran in both dimensions (it does on scenes 0, 4 and 6, 2D, and 7,
+   * 3D: the others' even split already gives the top digit the bits its keys allow) */
+  bool in2 = false, in3 = false;
+  for (int sc = 0; sc < 8; sc++) {
+    if (widened[sc] && sc % 2 == 0) in2 = true;
+    if (widened[sc] && sc % 2 == 1) in3 = true;
+  }
+  CHECK_MSG(in2 && in3, "NBS_PARTITION=wide widened the top digit in 2D %d, in 3D %d", in2, in3);
 }
 
 /* The partition by the crowded core (nbs__cs_core_part): where a few elements far out
