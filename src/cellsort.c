@@ -28,9 +28,9 @@
  *      steps 1-3 are instead one partition by the top digit that carries the coordinates
  *      along in whole lines, then each bucket put in order in cache (nbs__cs_partition:
  *      3D N = 1e8, Zen 4, one thread, 52.8-78.6 -> 43.8-45.7 ns per element; until its top
- *      digit was widened, nbs__cs_part_digits, it did not run there, its buckets too large,
- *      and the figures earlier notes gave for 1e8 were the sort and the gather's both ways,
- *      whose random reads of 2.4 GB miss the TLB too); from 8 MiB to 1 GiB,
+ *      digit was widened, nbs__cs_part_digits, it gave way there to the sort and the gather,
+ *      whose random reads of 2.4 GB miss the TLB too, its buckets too large for a cache);
+ *      from 8 MiB to 1 GiB,
  *      which of the two is faster depends on the machine's memory, and the context times
  *      its first detections both ways and keeps the faster (nbs__cs_way: on an Intel guest
  *      whose random reads of memory cost 4x the AMD instances', the partition, 3D N = 1e6
@@ -1442,10 +1442,11 @@ int nbs__cellsort_simd(void) {
  * only beyond (interleaved, ns per element, one thread, random order, partition against
  * gather: 3D N = 1e6, 24 MB, 37.9 against 32.5; 1e7, 240 MB, 39.0 / 35.5, two threads 20.9
  * / 19.0, sorted order 37.8 / 32.7; 2e7 43.3 / 41.3; 3e7, 720 MB, 44.0 / 44.0; 1e8, 2.4 GB,
- * 62.2 / 67.1; 2D 1e7, 160 MB, 22.7 / 21.6; 3e7 29.4 / 26.8; 1e8, 1.6 GB, 30.6 / 35.2; but
- * the partition then gave way to the sort wherever the even split of the key's bits left its
- * top digit too narrow, 3D from about N = 1.7e7, 30-bit keys, so at 3D 3e7 and 1e8 both
- * columns were the sort and the gather: see nbs__cs_part_digits). Far
+ * 62.2 / 67.1; 2D 1e7, 160 MB, 22.7 / 21.6; 3e7 29.4 / 26.8; 1e8, 1.6 GB, 30.6 / 35.2; on
+ * the library of 2026-11-29, before nbs__cs_part_digits, the partition gave way to the sort
+ * wherever the even split of the key's bits left its top digit too narrow, 3D from about
+ * N = 1.7e7, 30-bit keys: there the figures of "partition" were the sort and the gather's,
+ * unless the code of the day differed). Far
  * beyond, the gather's random reads miss the TLB as well as the caches. A constant, not the
  * machine's cache size, so that the path, and so the time, does not depend on what the C
  * library reports (glibc's sysconf gave 320 MiB of L3 on the benchmark machine, which has
