@@ -11,7 +11,8 @@
  * coordinates at random, on the box's lowest or highest face or at its corner; in chains that
  * touch, overlap, or just miss) at elements spread over the input or consecutive, and
  * checks:
- *   - a context created with NBS_PARTITION=always (the partitions wherever they can run) and
+ *   - a context created with NBS_PARTITION=always (the partitions wherever they can run; =wide,
+ *     their top digit widened wherever the keys allow, where the seed is odd) and
  *     one with NBS_PARTITION=never (the sort and the gather) give cellsort's same status and,
  *     where it is NBS_OK, the same pairs in the same order, byte for byte, in the mode and
  *     with the threads (1 to 3) the bytes choose;
@@ -141,14 +142,14 @@ static void fz_build(fz_reader *rd, fz_scene *s) {
   for (int32_t j = 0; j < s->groups; j++) fz_group(rd, s, &rng);
 }
 
-/* Partitioned detections (of the always context), and those by the crowded core: replay
- * prints them. */
-static long fz_partitioned, fz_core_partitioned;
+/* Partitioned detections (of the always context), those by the crowded core, and those
+ * whose top digit was widened: replay prints them. */
+static long fz_partitioned, fz_core_partitioned, fz_widened;
 
 void fz_summary(void);
 void fz_summary(void) {
-  printf("%ld detections partitioned, %ld of them by the crowded core\n", fz_partitioned,
-         fz_core_partitioned);
+  printf("%ld detections partitioned, %ld of them by the crowded core, %ld with the top digit "
+         "widened\n", fz_partitioned, fz_core_partitioned, fz_widened);
 }
 
 typedef struct fz_result {
@@ -198,6 +199,7 @@ static void fz_compare(const fz_scene *s, nbs_context *part, nbs_context *sort, 
   if (a.st == NBS_OK && part->cs_partitioned) { /* (a time step may sort from scratch) */
     fz_partitioned++;
     if (part->cs_outliers >= 0) fz_core_partitioned++;
+    if (part->cs_part_widened) fz_widened++;
   }
   fz_result b = fz_detect(sort, s, NBS_CELLSORT, fresh, 0);
   if (!fz_same(&a, &b)) {
@@ -222,7 +224,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   fz_reader rd = {data, size};
   static fz_scene s;
   fz_build(&rd, &s);
-  nbs_context *part = fz_context(&s, "always"), *sort = fz_context(&s, "never");
+  /* an odd seed: the partition's top digit widened wherever the keys allow */
+  nbs_context *part = fz_context(&s, s.seed & 1 ? "wide" : "always");
+  nbs_context *sort = fz_context(&s, "never");
   fz_compare(&s, part, sort, 1, "from scratch");
   if (s.step) {
     uint64_t rng = s.seed ^ 0x5bd1e995u;
