@@ -4508,9 +4508,14 @@ static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__
 #if defined(_OPENMP)
 #pragma omp barrier
 #endif
+      /* each thread's histogram for its buckets' sorts: pd.lo's digits, which may be wider
+       * than the top one where that is widened for few keys (NBS_PARTITION=wide), so at a
+       * stride of the widest digit (hist holds that many per thread), not of B (a finding of
+       * fuzz_partition: two threads' histograms overlapped) */
       NBS__PARTS(t, threads) {
-        nbs__cs_part_buckets(c, run, &d, t, threads, top, B, eb, pd.lo, hist + (size_t)t * B,
-                             most, spare + (size_t)t * per, NULL, kg, NULL, NULL);
+        nbs__cs_part_buckets(c, run, &d, t, threads, top, B, eb, pd.lo,
+                             hist + (size_t)t * ((size_t)1 << NBS__RADIX_BITS), most,
+                             spare + (size_t)t * per, NULL, kg, NULL, NULL);
       }
     }
   }
