@@ -520,14 +520,16 @@ static bool nbs__radix_top_first(int32_t n, nbs__digits dg) {
  * one width, unless that leaves the top digit too narrow for the input: the even split puts
  * what the key's bits do not fill in the top digit (30 bits: 8, 8, 8 and 6), and from 3D
  * N = 1.7e7 or so (256 cells per axis) a bucket of its 64 would hold 1.5% of the elements,
- * 1.6 million keys at N = 1e8, far past NBS__RADIX_LOCAL_MAX, and the partition gave way to
+ * 1.7 million keys at N = 1e8, far past NBS__RADIX_LOCAL_MAX, and the partition gave way to
  * the sort and the gather. There (or always, with `wide`: NBS_PARTITION=wide, for the tests)
  * the top digit takes as many bits as the keys allow, at most NBS__RADIX_BITS (there must be
  * as many keys as the square of its buckets), and the bits below it as many passes as
  * before, of the width that covers them (3D N = 1e8, 30 bits: 9 and 7, 7, 7, buckets of a
  * layer of cells, 212,000 keys; 2D, 31 bits: 9 and 8, 8, 8). Where the widths do not add
  * up, the last of those passes reaches into the top digit, which every key of a bucket
- * shares: it moves nothing there. */
+ * shares: it moves nothing there. By default the top digit is widened only for more than
+ * 262,144 keys (the even split leaves it 3 bits at the fewest), and takes 9 bits; with `wide`
+ * and few keys it may be narrower than the digits below it. */
 typedef struct nbs__cs_pdigits {
   nbs__digits lo;
   int shift;
