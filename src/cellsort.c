@@ -556,6 +556,12 @@ static nbs__cs_pdigits nbs__cs_part_digits(int32_t n, int bits, bool wide) {
   return pd;
 }
 
+/* Whether the partition of n keys by the digits pd can run: two digits or more, and at least
+ * as many keys as the square of its buckets (nbs__radix_top_first's rule, for its top digit). */
+static bool nbs__cs_part_top_first(int32_t n, const nbs__cs_pdigits *pd) {
+  return pd->lo.passes >= 2 && (uint64_t)n >= (uint64_t)pd->buckets * pd->buckets;
+}
+
 /* Whether the partition's largest bucket, `most` of n keys, is sorted in the cache: at most
  * NBS__RADIX_LOCAL_MAX keys, or, where there are more elements than the buckets hold at that,
  * at most 1/128 of them. A larger bucket (3D N = 1e8: 212,000 keys, 10 MB with its
@@ -4466,9 +4472,7 @@ static bool nbs__cs_partition(const nbs__cs *c, const nbs__run *run, const nbs__
   const size_t B = pd.buckets;
   const nbs__cs_dst d = nbs__cs_dst_of(c);
   const size_t wc = B * (size_t)(1 + d.S) * NBS__CS_LINE * sizeof(uint64_t);
-  if (dg.passes < 2 || (uint64_t)n < (uint64_t)B * B || (size_t)threads * wc > spare_bytes) {
-    return false;
-  }
+  if (!nbs__cs_part_top_first(n, &pd) || (size_t)threads * wc > spare_bytes) return false;
   const int kshift = pd.shift;
   const uint64_t dmask = B - 1;
   uint32_t top[((size_t)1 << NBS__RADIX_BITS) + 1];
@@ -4795,7 +4799,6 @@ static void nbs__cs_sort_gather(const nbs__cs *c, nbs__run *run, const nbs__cs_k
   /* 1-3 at once, where the context has measured the partition faster (nbs__cs_way): by the
    * crowded core's keys, or by the whole keys (where they are packed, and also where the
    * input is larger than 1 GiB) */
-  run->ctx->cs_part_widened = false;
   bool parted = part && core &&
                 nbs__cs_core_part(c, run, kg, eb, bits, hist, threads, spare, spare_bytes);
   const bool counted = part && !parted && run->precounts && eb == run->pre_eb &&
@@ -5248,9 +5251,8 @@ bool nbs__cellsort_fresh(nbs__run *run, const nbs_input *in, nbs_algorithm asked
    * 35.4, 2D 43.0 -> 35.8 of five; two threads, 3D preparation 19.9-21.9 -> 16.6-18.7; the
    * same bytes) */
   const nbs__cs_pdigits pd = nbs__cs_part_digits(n, plan.bits, ctx->cs_part_wide);
-  const bool tally = plan.packed && nbs__cs_way(run, threads) == 2 &&
-                     nbs__radix_digits(plan.bits).passes >= 2 &&
-                     (uint64_t)n >= (uint64_t)pd.buckets * pd.buckets;
+  const bool tally =
+      plan.packed && nbs__cs_way(run, threads) == 2 && nbs__cs_part_top_first(n, &pd);
 
   /* step 1 where nbs__cs_sort_gather puts it; the order the block held is gone */
   run->order_dropped = order && !run->fresh;

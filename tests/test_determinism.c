@@ -429,19 +429,24 @@ static void test_caller_threads(void) {
 #endif
 }
 
+/* A context of `threads` threads created with NBS_PARTITION=way in the environment; false
+ * where it could not be. */
+static bool partition_context(int threads, const char *way, nbs_context **ctx) {
+  nbs_context_def cdef = nbs_default_context_def();
+  cdef.threads = threads;
+  CHECK_TRUE(setenv("NBS_PARTITION", way, 1) == 0);
+  const nbs_status st = nbs_context_create(&cdef, ctx);
+  unsetenv("NBS_PARTITION");
+  CHECK_STATUS(st, NBS_OK);
+  return st == NBS_OK;
+}
+
 /* Two contexts of `threads` threads: *part created with NBS_PARTITION=always in the
  * environment, *sort with NBS_PARTITION=never; false where either could not be. */
 static bool partition_contexts(int threads, nbs_context **part, nbs_context **sort) {
-  nbs_context_def cdef = nbs_default_context_def();
-  cdef.threads = threads;
-  CHECK_TRUE(setenv("NBS_PARTITION", "always", 1) == 0);
-  nbs_status st = nbs_context_create(&cdef, part);
-  CHECK_TRUE(setenv("NBS_PARTITION", "never", 1) == 0);
-  nbs_status st2 = nbs_context_create(&cdef, sort);
-  unsetenv("NBS_PARTITION");
-  CHECK_STATUS(st, NBS_OK);
-  CHECK_STATUS(st2, NBS_OK);
-  return st == NBS_OK && st2 == NBS_OK;
+  const bool a = partition_context(threads, "always", part);
+  const bool b = partition_context(threads, "never", sort);
+  return a && b;
 }
 
 /* The partition: cellsort's sort by the top digit with the coordinates carried along
@@ -496,12 +501,7 @@ static void test_partition(void) {
                   "%d elements", sc, (int)s.n);
         ASSERT_OK(detect_raw(sort, &s, NBS_CELLSORT, (nbs_mode)mode, &b));
         /* the top digit widened (NBS_PARTITION=wide): the same bytes */
-        nbs_context_def cdef = nbs_default_context_def();
-        cdef.threads = counts[t];
-        ASSERT_TRUE(setenv("NBS_PARTITION", "wide", 1) == 0);
-        const nbs_status st = nbs_context_create(&cdef, &wide);
-        unsetenv("NBS_PARTITION");
-        ASSERT_STATUS(st, NBS_OK);
+        ASSERT_TRUE(partition_context(counts[t], "wide", &wide));
         ASSERT_OK(detect_raw(wide, &s, NBS_CELLSORT, (nbs_mode)mode, &w));
         CHECK_MSG(wide->cs_partitioned == expect, "scene %d (%dD), %d threads, NBS_PARTITION="
                   "wide: the partition %s", sc, dim, counts[t],
