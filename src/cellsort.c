@@ -123,6 +123,9 @@
  *    again and merged back, words and coordinates, in place: the words kept move only where
  *    the elements taken out and put back lie on either side of them (nbs__cs_warm_merge).
  *    That replaces steps 1-3 by one pass like the gather and a merge of the few.
+ * Either way a step still reads every coordinate once in the order's places, at random; for
+ * inputs over 8 MiB the context times its first steps both from the order and from scratch
+ * and takes the faster (nbs__cellsort_steps_way: at 3D N = 1e8, 2.4 GB, from scratch).
  * Measured (3D, N = 1e6, fraction 0.5, random order, one thread, interleaved, min of 3-5
  * processes, ns per element; nbs_bench --move D against --fresh; the same bytes):
  *   nbs__cs_warm (before nbs__cs_rekey): from scratch 33.0-33.3, unmoved 29.6, steps of
@@ -1475,8 +1478,9 @@ bool nbs__cellsort_partition_wide(void) {
 }
 
 /* Whether a context measures which way its detections from scratch take below that size
- * (nbs__cs_way): unless NBS_PARTITION says "always" or "never", read when the context is
- * created. */
+ * (nbs__cs_way), and whether its time steps start from the last order or from scratch
+ * (nbs__cellsort_steps_way): unless NBS_PARTITION says "always" or "never" (then every step
+ * that can starts from the order), read when the context is created. */
 bool nbs__cellsort_tune(void) {
   const char *e = getenv("NBS_PARTITION");
   return !(e && (strcmp(e, "always") == 0 || strcmp(e, "never") == 0));
@@ -2855,7 +2859,18 @@ static int nbs__cs_way(nbs__run *run, int threads) {
 }
 
 void nbs__cellsort_tried(nbs_context *ctx, const nbs__run *run, double seconds) {
-  if (!run->cs_tried || run->n <= 0) return; /* started from the last order: no try */
+  if (run->n <= 0) return;
+  /* a time step's try (nbs__cellsort_steps_way): one from the order counts only where it
+   * started from it (not where too many elements had moved), and either only where cellsort
+   * ran (auto may have chosen another algorithm) */
+  if (run->cs_step_try && run->ran == NBS_CELLSORT &&
+      (run->cs_step_try == 2 || run->reused_order)) {
+    const int w = run->cs_step_try - 1;
+    const double per = seconds / (double)run->n;
+    if (ctx->cs_steps_tries[w] == 0 || per < ctx->cs_steps_best[w]) ctx->cs_steps_best[w] = per;
+    ctx->cs_steps_tries[w]++;
+  }
+  if (!run->cs_tried) return; /* started from the last order: no try of the way */
   const int w = run->cs_tried == 1 ? 0 : 1;
   /* the partition that could not run is never taken for this class */
   const double per = run->cs_tried == 3 ? DBL_MAX : seconds / (double)run->n;
@@ -5009,6 +5024,53 @@ static nbs__cs_kept nbs__cs_kept_of(const nbs__cs_keying *kg) {
  * 14.00 / 13.98 and 13.69 / 13.78, no faster: by perf the pass saves its 0.5 ns there too,
  * and the merge and the gather after it take about as much more (not understood). With
  * radii (the scene `wide`, 3D N = 1e6) 49.36 -> 48.46. */
+/* Whether a time step starts from the last order or sorts from scratch, for inputs over
+ * NBS__CS_TUNE_MIN bytes (below, a step's reads hit the caches and it is the faster).
+ * A step from the order replaces the key pass and the sort by a pass like it and a merge of
+ * the few elements that changed cells, but still gathers every coordinate at random
+ * (nbs__cs_rekey); from scratch, the partition reads the input in order. Which is faster
+ * depends on the machine and on the size: on the Zen 4 instance (3D, random order, steps of
+ * 1e-3 diameters, one thread, ns per element) N = 3e7 (720 MB) steps 29.0-31.3 against
+ * 39.9-42.8 from scratch, but N = 1e8 (2.4 GB, where the gather misses the TLB at every
+ * element) 53.8-67.5 against 43.4-44.8. So where cs_tune, a context times its first steps
+ * of a class (dimension, threads and the power of two of the input's bytes, as nbs__cs_way),
+ * NBS__CS_TUNE_TRIES from the order and as many from scratch, alternating, each from the
+ * detection's start to its search, and takes the faster from then on: run->fresh, set here,
+ * makes a detection one from scratch. A start from the order right after a detection from
+ * scratch writes the order's keys first (nbs__cs_keys_of), which a step does not: it is not
+ * timed. A try costs at most the difference between the two ways, once; the output is the
+ * same bytes either way (test_determinism tuned_steps). */
+void nbs__cellsort_steps_way(nbs__run *run, nbs_algorithm asked) {
+  nbs_context *ctx = run->ctx;
+  const int32_t n = run->n;
+  run->cs_step_try = 0;
+  if (!ctx->cs_tune || run->fresh || n < 2 || (asked != NBS_AUTO && asked != NBS_CELLSORT)) {
+    return;
+  }
+  /* an order this detection would start from (nbs__cellsort, step 0) */
+  if (ctx->work_kind != NBS__WORK_CELLSORT || ctx->cs_order_n != n || ctx->cs_warm_wait > 0) {
+    return;
+  }
+  const size_t bytes = nbs__input_bytes(n, run->dim, run->r != NULL);
+  if (bytes <= NBS__CS_TUNE_MIN) return;
+  const int cls = run->dim | nbs__cs_threads(run) << 2 | nbs__bits((uint64_t)bytes) << 10;
+  if (cls != ctx->cs_steps_class) {
+    ctx->cs_steps_class = cls;
+    ctx->cs_steps_tries[0] = ctx->cs_steps_tries[1] = 0;
+    ctx->cs_steps_best[0] = ctx->cs_steps_best[1] = 0.0;
+  }
+  const int *tries = ctx->cs_steps_tries;
+  if (tries[0] >= NBS__CS_TUNE_TRIES && tries[1] >= NBS__CS_TUNE_TRIES) {
+    run->fresh = ctx->cs_steps_best[1] < ctx->cs_steps_best[0];
+  } else if (tries[0] <= tries[1]) {
+    /* from the order, timed where it has its keys (or needs none: nbs__cs_warm) */
+    if (ctx->cs_order_eb != 32 || ctx->cs_keys) run->cs_step_try = 1;
+  } else {
+    run->fresh = true;
+    run->cs_step_try = 2;
+  }
+}
+
 bool nbs__cellsort_step(nbs__run *run, const nbs_input *in, nbs_algorithm asked) {
   nbs_context *ctx = run->ctx;
   const int32_t n = run->n;

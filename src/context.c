@@ -294,6 +294,7 @@ nbs_status nbs_context_create(const nbs_context_def *def, nbs_context **out) {
   ctx->cs_part_wide = nbs__cellsort_partition_wide();
   ctx->cs_tune = nbs__cellsort_tune();
   ctx->cs_tune_class = -1;
+  ctx->cs_steps_class = -1;
   ctx->cs_steal_first = nbs__cellsort_steal_first();
   ctx->bytes = ctx->peak_bytes = sizeof *ctx;
   ctx->error_element = -1;
@@ -462,7 +463,10 @@ static nbs_status nbs__detect(nbs_context *ctx, const nbs_input *in, const nbs_d
   ctx->cs_fresh_words = false;
   NBS__TRY(nbs__prepare_args(&run, in));
   /* A time step of cellsort reads the input once, validating it and measuring its bounds
-   * as it computes each element's key (nbs__cellsort_step); else input.c's pass. */
+   * as it computes each element's key (nbs__cellsort_step); else input.c's pass. Large
+   * inputs' steps may be taken from scratch instead, where that is faster
+   * (nbs__cellsort_steps_way). */
+  nbs__cellsort_steps_way(&run, d.algorithm);
   if (!nbs__cellsort_step(&run, in, d.algorithm) && !nbs__cellsort_fresh(&run, in, d.algorithm)) {
     NBS__TRY(nbs__prepare_scan(&run, in));
   }
@@ -510,7 +514,9 @@ static nbs_status nbs__detect(nbs_context *ctx, const nbs_input *in, const nbs_d
   if (run.t_search > 0.0) st->seconds_search = t_found - run.t_search;
   st->seconds = t_found - t_start;
   if (s != NBS_OK) return s;
-  if (run.cs_try && run.t_search > 0.0) nbs__cellsort_tried(ctx, &run, run.t_search - t_start);
+  if ((run.cs_try || run.cs_step_try) && run.t_search > 0.0) {
+    nbs__cellsort_tried(ctx, &run, run.t_search - t_start);
+  }
 
   ctx->pairs_count = run.callback ? 0 : run.count;
   ctx->pairs_valid = true;

@@ -170,6 +170,16 @@ struct nbs_context {
   int cs_tune_class;
   int cs_tune_tries[2];
   double cs_tune_best[2];
+  /* Likewise for time steps above NBS__CS_TUNE_MIN bytes, where cs_tune: whether a detection
+   * that could start from the last order does, or sorts from scratch (nbs__cs_steps_way; at
+   * 3D N = 1e8 a step's random gather of 2.4 GB costs more than a partition from scratch).
+   * cs_steps_tries[w] detections of way w (0 from the last order, with its keys, 1 from
+   * scratch) timed for inputs of class cs_steps_class, the fastest cs_steps_best[w] seconds
+   * per element from the detection's start to its search; once each has NBS__CS_TUNE_TRIES,
+   * the faster is taken. */
+  int cs_steps_class;
+  int cs_steps_tries[2];
+  double cs_steps_best[2];
   /* cellsort's threaded sweep (nbs__cs_sweep_parts): the chunks the last detection's threads
    * took from other threads' parts (read by the tests), and NBS_STEAL=first, which
    * makes every thread take one first (nbs__cellsort_steal_first). */
@@ -258,6 +268,10 @@ typedef struct nbs__run {
   int8_t cs_way;
   bool cs_try;
   int8_t cs_tried;
+  /* This detection is one of the context's timed tries of its time steps (cs_steps_tries):
+   * 1 from the last order, 2 from scratch (run->fresh set by nbs__cs_steps_way); 0 not a
+   * try. */
+  int8_t cs_step_try;
   bool reused_order;  /* cellsort started from the last cell order */
   int64_t moved;      /* the elements it sorted again */
   /* When the algorithm began its search, every element in place (nbs__search_begins; 0:
@@ -479,6 +493,10 @@ bool nbs__cellsort_tune(void);
 /* After a detection that succeeded: where it was one of cellsort's timed tries (run->cs_try),
  * its time from its start to its search, `seconds`, is recorded (nbs_context.cs_tune). */
 void nbs__cellsort_tried(nbs_context *ctx, const nbs__run *run, double seconds);
+/* Before a detection's pass over the input: where the context times its steps
+ * (nbs_context.cs_steps_tries) and this detection could start from the last order, it may
+ * be made one from scratch (run->fresh). */
+void nbs__cellsort_steps_way(nbs__run *run, nbs_algorithm asked);
 bool nbs__cellsort_steal_first(void);
 
 /* Work-block layouts, for work_kind. */

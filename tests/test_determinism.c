@@ -1052,14 +1052,18 @@ static void test_time_steps(void) {
   /* An input over 8 MiB (cellsort's NBS__CS_PREFETCH_MIN), where the gathers prefetch:
    * the gather from scratch and that of nbs__cs_rekey, with one thread and two, and two
    * with NBS_STEAL=first (each thread first gathers, sorts buckets of and sweeps the end
-   * of the other's part: ranges taken from another's part, in all three). */
+   * of the other's part: ranges taken from another's part, in all three). NBS_PARTITION=never:
+   * from scratch the gather, and every step from the order (a context that times its ways
+   * would take some steps from scratch: tuned_steps). */
   for (int threads = 1; threads <= 3 && !test_failures; threads++) {
     nbs_context_def cdef = nbs_default_context_def();
     cdef.threads = threads == 3 ? 2 : threads;
     if (threads == 3) ASSERT_TRUE(setenv("NBS_STEAL", "first", 1) == 0);
+    ASSERT_TRUE(setenv("NBS_PARTITION", "never", 1) == 0);
     nbs_context *lctx;
     ASSERT_OK(nbs_context_create(&cdef, &lctx));
     unsetenv("NBS_STEAL");
+    unsetenv("NBS_PARTITION");
     scene big = det_scene(DET_UNIFORM, 3, 380000, 70.0, 1.18, 45);
     uint64_t rng = 78;
     for (int k = 0; k < 5 && !test_failures; k++) {
@@ -1080,6 +1084,126 @@ static void test_time_steps(void) {
   scene_free(&sr);
   nbs_context_destroy(ctx);
   nbs_context_destroy(ref);
+}
+
+/* Time steps of inputs over 8 MiB (nbs__cellsort_steps_way): by default the context times
+ * its first steps of a class from the last order and from scratch, two of each,
+ * alternating, and takes the faster from then on. A start from the order just after a
+ * detection from scratch writes the order's keys first, and is not timed (words with fewer
+ * than 32 element bits have no keys, and every start from the order is timed); nor is a
+ * start from the order that did not take place. Each branch of the choice is then forced
+ * (the measurements set by hand) and followed; an input of another class measures again,
+ * one below 8 MiB and a context under NBS_PARTITION=never never. Every step gives the bytes
+ * of a detection from scratch, with one thread and two. */
+static void tuned_steps_run(nbs_context *ctx, nbs_context *ref, scene *s, int threads,
+                            bool eb32, const char *name) {
+  uint64_t rng = 91;
+  nbs_stats st;
+  char what[96];
+  /* the tries: the first detection (no order), then for words with keys: an untimed start
+   * (keys written), a timed one, one from scratch, again; without keys every start is timed */
+  const int order_32[7] = {0, 1, 1, 0, 1, 1, 0};
+  const int tried_32[7][2] = {{0, 0}, {0, 0}, {1, 0}, {1, 1}, {1, 1}, {2, 1}, {2, 2}};
+  const int order_far[5] = {0, 1, 0, 1, 0};
+  const int tried_far[5][2] = {{0, 0}, {1, 0}, {1, 1}, {2, 1}, {2, 2}};
+  const int steps = eb32 ? 7 : 5;
+  for (int k = 0; k < steps && !test_failures; k++) {
+    if (k > 0) det_move(s, k, 7, 0.01, &rng);
+    snprintf(what, sizeof what, "%s, %d threads, step %d", name, threads, k);
+    det_step(ctx, ref, s, NBS_AUTO, NBS_MODE_CONTACTS, false, &st, what);
+    const int reused = eb32 ? order_32[k] : order_far[k];
+    const int *tried = eb32 ? tried_32[k] : tried_far[k];
+    CHECK_MSG(st.algorithm == NBS_CELLSORT && st.reused_order == reused,
+              "%s: ran %d, reused %d, expected %d", what, (int)st.algorithm, st.reused_order,
+              reused);
+    /* (the first detection has no order of this n: a class measured before stays as it was
+     * until the next) */
+    CHECK_MSG(k == 0 ||
+                  (ctx->cs_steps_tries[0] == tried[0] && ctx->cs_steps_tries[1] == tried[1]),
+              "%s: tries %d and %d, expected %d and %d", what, ctx->cs_steps_tries[0],
+              ctx->cs_steps_tries[1], tried[0], tried[1]);
+  }
+  /* the choice, as measured: the faster way from then on (a start from the order after one
+   * from scratch writes its keys first, so the second is the plain step) */
+  const bool fresh = ctx->cs_steps_best[1] < ctx->cs_steps_best[0];
+  for (int k = 0; k < 3 && !test_failures; k++) {
+    det_move(s, k, 5, 0.01, &rng);
+    snprintf(what, sizeof what, "%s, %d threads, chosen %s, step %d", name, threads,
+             fresh ? "from scratch" : "from the order", k);
+    det_step(ctx, ref, s, NBS_AUTO, NBS_MODE_CONTACTS, false, &st, what);
+    CHECK_MSG(st.reused_order == !fresh, "%s: reused %d", what, st.reused_order);
+    CHECK_MSG(!eb32 || fresh || k == 0 || ctx->cs_stepped, "%s: not the step's pass", what);
+  }
+  /* either choice, forced */
+  for (int way = 0; way < 2 && !test_failures; way++) {
+    ctx->cs_steps_best[way] = 1.0;
+    ctx->cs_steps_best[1 - way] = 2.0;
+    for (int k = 0; k < 3 && !test_failures; k++) {
+      det_move(s, k, 5, 0.01, &rng);
+      snprintf(what, sizeof what, "%s, %d threads, %s forced, step %d", name, threads,
+               way ? "from scratch" : "from the order", k);
+      det_step(ctx, ref, s, NBS_AUTO, NBS_MODE_CONTACTS, false, &st, what);
+      CHECK_MSG(st.reused_order == (way == 0), "%s: reused %d", what, st.reused_order);
+      CHECK_MSG(ctx->cs_steps_tries[0] == 2 && ctx->cs_steps_tries[1] == 2,
+                "%s: tries %d and %d", what, ctx->cs_steps_tries[0], ctx->cs_steps_tries[1]);
+    }
+  }
+}
+
+static void test_tuned_steps(void) {
+  scene s3 = det_scene(DET_UNIFORM, 3, 400000, 75.0, 1.18, 65);  /* 9.6 MB */
+  scene s2 = det_scene(DET_UNIFORM, 2, 600000, 970.0, 1.18, 66); /* 9.6 MB */
+  scene far = det_scene(DET_UNIFORM, 3, 400000, 75.0, 1.18, 67);
+  det_far(&far, true, 75.0); /* keys of more than 31 bits: nbs__cs_warm */
+  scene small = det_scene(DET_UNIFORM, 3, 300000, 68.0, 1.18, 68); /* 7.2 MB */
+  for (int threads = 1; threads <= 2 && !test_failures; threads++) {
+    nbs_context_def cdef = nbs_default_context_def();
+    cdef.threads = threads;
+    nbs_context *ctx, *ref, *never;
+    ASSERT_OK(nbs_context_create(&cdef, &ref));
+    ASSERT_OK(nbs_context_create(&cdef, &ctx));
+    CHECK_TRUE(ctx->cs_tune && ctx->cs_steps_class == -1);
+    tuned_steps_run(ctx, ref, &s3, threads, true, "3D");
+    const int cls = ctx->cs_steps_class;
+    /* another class (2D) measures again, in the same context */
+    tuned_steps_run(ctx, ref, &s2, threads, true, "2D");
+    CHECK_MSG(ctx->cs_steps_class != cls, "2D: the class of 3D's (%d)", cls);
+    nbs_context_destroy(ctx);
+    ASSERT_OK(nbs_context_create(&cdef, &ctx));
+    tuned_steps_run(ctx, ref, &far, threads, false, "far");
+    nbs_context_destroy(ctx);
+    /* below 8 MiB, and under NBS_PARTITION=never: every step from the order, none timed */
+    ASSERT_OK(nbs_context_create(&cdef, &ctx));
+    ASSERT_TRUE(setenv("NBS_PARTITION", "never", 1) == 0);
+    ASSERT_OK(nbs_context_create(&cdef, &never));
+    unsetenv("NBS_PARTITION");
+    const struct {
+      nbs_context *c;
+      scene *s;
+      const char *name;
+    } plain[2] = {{ctx, &small, "below 8 MiB"}, {never, &s3, "NBS_PARTITION=never"}};
+    for (int p = 0; p < 2 && !test_failures; p++) {
+      uint64_t rng = 93;
+      for (int k = 0; k < 6 && !test_failures; k++) {
+        if (k > 0) det_move(plain[p].s, k, 7, 0.01, &rng);
+        char what[96];
+        snprintf(what, sizeof what, "%s, %d threads, step %d", plain[p].name, threads, k);
+        nbs_stats st;
+        det_step(plain[p].c, ref, plain[p].s, NBS_AUTO, NBS_MODE_CONTACTS, false, &st, what);
+        CHECK_MSG(st.reused_order == (k > 0), "%s: reused %d", what, st.reused_order);
+        CHECK_MSG(plain[p].c->cs_steps_tries[0] == 0 && plain[p].c->cs_steps_tries[1] == 0,
+                  "%s: tries %d and %d", what, plain[p].c->cs_steps_tries[0],
+                  plain[p].c->cs_steps_tries[1]);
+      }
+    }
+    nbs_context_destroy(ctx);
+    nbs_context_destroy(never);
+    nbs_context_destroy(ref);
+  }
+  scene_free(&s3);
+  scene_free(&s2);
+  scene_free(&far);
+  scene_free(&small);
 }
 
 /* The time step's pass over the input (nbs__cellsort_step), which replaces input.c's
@@ -1771,6 +1895,7 @@ int main(int argc, char **argv) {
       {"tuned_way", test_tuned_way},
       {"kernels", test_kernels},
       {"time_steps", test_time_steps},
+      {"tuned_steps", test_tuned_steps},
       {"step_pass", test_step_pass},
       {"fresh_pass", test_fresh_pass},
       {"golden_hashes", test_golden_hashes},
