@@ -4642,10 +4642,18 @@ static bool nbs__cs_core_part(const nbs__cs *c, const nbs__run *run, const nbs__
   nbs__cs_corebox box;
   const int cb = nbs__cs_core_box(c, run, kg, bits, box.lo, box.cw);
   if (cb + eb > 63) return false;
-  const nbs__digits dg = nbs__radix_digits(cb);
-  if (!c->idx && dg.passes >= nbs__radix_digits(bits).passes) return false;
-  if (!nbs__radix_top_first(n, dg)) return false;
-  box.pad = dg.passes * dg.width - cb;
+  const nbs__digits dg0 = nbs__radix_digits(cb);
+  if (!c->idx && dg0.passes >= nbs__radix_digits(bits).passes) return false;
+  /* The digits: the even split's, the relative keys shifted up by pad so that the top digit
+   * is whole (30 bits: by 2, four digits of 8); or, where that top digit's buckets would be
+   * too large for a cache, a top digit widened as the whole keys' partition widens its own
+   * (nbs__cs_part_digits: 3D clustered N = 1e8, a core of 30 bits, 9 and 7, 7, 7; unshifted,
+   * pad 0). Until then the core's partition gave way there to the sort and the gather, as the
+   * whole keys' had. */
+  const nbs__cs_pdigits pd = nbs__cs_part_digits(n, cb, run->ctx->cs_part_wide);
+  if (!nbs__cs_part_top_first(n, &pd)) return false;
+  const nbs__digits dg = pd.lo; /* dg0 where not widened */
+  box.pad = pd.wide ? 0 : dg0.passes * dg0.width - cb;
   if (cb + box.pad + eb > 62) return false;
   /* the whole keys of the box's lowest and highest positions within the fields' ranges
    * (nbs__cs_core_first), and of each bucket's lowest: no core key lies outside them */
@@ -4659,8 +4667,8 @@ static bool nbs__cs_core_part(const nbs__cs *c, const nbs__run *run, const nbs__
     }
     box.wmax = hi[2] << kg->sz | hi[1] << kg->sy | hi[0];
   }
-  const size_t B = dg.buckets;
-  const int kshift = (dg.passes - 1) * dg.width;
+  const size_t B = pd.buckets;
+  const int kshift = pd.wide ? pd.shift : (dg0.passes - 1) * dg0.width;
   const uint64_t dmask = B - 1;
   uint64_t bound[(size_t)1 << NBS__RADIX_BITS];
   uint32_t between[(size_t)1 << NBS__RADIX_BITS], mfrom[((size_t)1 << NBS__RADIX_BITS) + 1];
@@ -4724,7 +4732,7 @@ static bool nbs__cs_core_part(const nbs__cs *c, const nbs__run *run, const nbs__
       /* the outliers' list at spare's end: keys and elements, then the sort's copy */
       const size_t no = (size_t)ofrom[threads], list = no * 24 + 64;
       const size_t R = list <= spare_bytes ? (spare_bytes - list) & ~(size_t)63 : 0;
-      fits = list <= spare_bytes && most <= NBS__RADIX_LOCAL_MAX &&
+      fits = list <= spare_bytes && nbs__cs_part_fits(n, most) &&
              (size_t)threads * wc <= R && (size_t)threads * per <= R;
       ok = (uint64_t *)(void *)(spare + R);
       oe = (int32_t *)(void *)(ok + no);
@@ -4759,13 +4767,16 @@ static bool nbs__cs_core_part(const nbs__cs *c, const nbs__run *run, const nbs__
           nbs__cs_take(c, run, p, e);
         }
       }
-      /* e */
+      /* e (each thread's histogram at the widest digit's stride, as in nbs__cs_partition:
+       * a widened top digit may be narrower than those below it) */
       NBS__PARTS(t, threads) {
-        nbs__cs_part_buckets(c, run, &d, t, threads, top, B, eb, dg, hist + (size_t)t * B, most,
+        nbs__cs_part_buckets(c, run, &d, t, threads, top, B, eb, dg,
+                             hist + (size_t)t * ((size_t)1 << NBS__RADIX_BITS), most,
                              spare + (size_t)t * per, &box, kg, mfrom, se + below);
       }
     }
   }
+  run->ctx->cs_part_widened = fits && pd.wide;
   if (!fits) return false;
   /* f */
 #if defined(_OPENMP)

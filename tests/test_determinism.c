@@ -564,6 +564,7 @@ static void test_partition(void) {
  * outliers. */
 static void test_core_partition(void) {
   const int counts[] = {1, 2, 3};
+  int widened[2] = {0, 0};
   for (int sc = 0; sc < 12; sc++) {
     const int dim = sc == 8 || sc == 9 || sc == 11 ? 3 : sc == 10 ? 2 : 2 + sc % 2;
     const double box = sc == 11 ? 31.5 : dim == 3 ? 40.0 : 250.0, far = 1e6;
@@ -694,6 +695,18 @@ static void test_core_partition(void) {
         CHECK_MSG(a.count > (size_t)s.n / 4, "scene %d: only %zu pairs", sc, a.count);
         CHECK_MSG(same_bytes(&a, &b), "scene %d (%dD) mode %d, %d threads: the core's "
                   "partition differs from the sort", sc, dim, mode, counts[t]);
+        /* and with the top digit widened wherever the keys allow (NBS_PARTITION=wide) */
+        nbs_context *wide;
+        pair_list w;
+        ASSERT_TRUE(partition_context(counts[t], "wide", &wide));
+        ASSERT_OK(detect_raw(wide, &s, NBS_CELLSORT, (nbs_mode)mode, &w));
+        CHECK_MSG(wide->cs_partitioned, "scene %d (%dD), %d threads, NBS_PARTITION=wide: the "
+                  "partition did not run", sc, dim, counts[t]);
+        if (wide->cs_part_widened && wide->cs_outliers >= 0) widened[dim - 2]++;
+        CHECK_MSG(same_bytes(&w, &b), "scene %d (%dD) mode %d, %d threads: the core's partition "
+                  "with its top digit widened differs from the sort", sc, dim, mode, counts[t]);
+        pair_list_free(&w);
+        nbs_context_destroy(wide);
         pair_list_free(&a);
         pair_list_free(&b);
         nbs_context_destroy(part);
@@ -702,6 +715,10 @@ static void test_core_partition(void) {
     }
     scene_free(&s);
   }
+  /* the widened digits taken by the core's partition, in both dimensions */
+  CHECK_MSG(widened[0] > 0 && widened[1] > 0,
+            "the core's partition widened its top digit in %d 2D and %d 3D detections",
+            widened[0], widened[1]);
 }
 
 /* ctx detects s with cellsort from scratch (fresh) or from the last order, into *out. */
