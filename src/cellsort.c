@@ -4634,8 +4634,8 @@ static void nbs__cs_core_merge(const nbs__cs *c, const nbs__run *run, const nbs_
  * more digits than the core's (the huge domain, whose core is all of it: nbs__cs_partition
  * does as well), where the partition would not (too few elements for the digits, a bucket too
  * large: nbs__cs_part_fits), or where the buffers and the outliers' list do not fit spare.
- * Where the core's keys take 30 bits or more (3D N = 1e8 clustered), the top digit is widened
- * as nbs__cs_partition's (above). A sparse domain's core at N = 1e8 (fraction 0.005, 2188 cells
+ * Where the even split's top digit would leave its buckets too large (3D clustered N = 1e8, a
+ * core of 30 bits), the top digit is widened as nbs__cs_partition's (nbs__cs_part_digits). A sparse domain's core at N = 1e8 (fraction 0.005, 2188 cells
  * per axis) takes 37 bits, which with the element's 27 do not fit a word: that detection still
  * sorts and gathers. */
 static bool nbs__cs_core_part(const nbs__cs *c, const nbs__run *run, const nbs__cs_keying *kg,
