@@ -123,9 +123,10 @@
  *    again and merged back, words and coordinates, in place: the words kept move only where
  *    the elements taken out and put back lie on either side of them (nbs__cs_warm_merge).
  *    That replaces steps 1-3 by one pass like the gather and a merge of the few.
- * Either way a step still reads every coordinate once in the order's places, at random; for
- * inputs over 8 MiB the context times its first steps both from the order and from scratch
- * and takes the faster (nbs__cellsort_steps_way: at 3D N = 1e8, 2.4 GB, from scratch).
+ * Either way a step still reads every coordinate once in the order's places, at random;
+ * where a detection from scratch would take the partition, which reads the input in order,
+ * the context times its first steps both from the order and from scratch and takes the
+ * faster (nbs__cellsort_steps_way: at 3D N = 1e8, 2.4 GB, from scratch).
  * Measured (3D, N = 1e6, fraction 0.5, random order, one thread, interleaved, min of 3-5
  * processes, ns per element; nbs_bench --move D against --fresh; the same bytes):
  *   nbs__cs_warm (before nbs__cs_rekey): from scratch 33.0-33.3, unmoved 29.6, steps of
@@ -5039,16 +5040,18 @@ static nbs__cs_kept nbs__cs_kept_of(const nbs__cs_keying *kg) {
  * 14.00 / 13.98 and 13.69 / 13.78, no faster: by perf the pass saves its 0.5 ns there too,
  * and the merge and the gather after it take about as much more (not understood). With
  * radii (the scene `wide`, 3D N = 1e6) 49.36 -> 48.46. */
-/* Whether a time step starts from the last order or sorts from scratch, for inputs over
- * NBS__CS_TUNE_MIN bytes (below, a step's reads hit the caches and it is the faster).
+/* Whether a time step starts from the last order or sorts from scratch, where a detection
+ * from scratch takes the partition (nbs__cs_way: inputs over cs_part_min, 1 GiB, or of a
+ * class the context measured the partition faster for; elsewhere the step is the faster).
  * A step from the order replaces the key pass and the sort by a pass like it and a merge of
  * the few elements that changed cells, but still gathers every coordinate at random
  * (nbs__cs_rekey); from scratch, the partition reads the input in order. Which is faster
  * depends on the machine and on the size: on the Zen 4 instance (3D, random order, steps of
- * 1e-3 diameters, one thread, ns per element) N = 3e7 (720 MB) steps 29.0-31.3 against
- * 39.9-42.8 from scratch, but N = 1e8 (2.4 GB, where the gather misses the TLB at every
- * element) 53.8-67.5 against 43.4-44.8. So where cs_tune, a context times its first steps
- * of a class (dimension, threads and the power of two of the input's bytes, as nbs__cs_way),
+ * 1e-3 diameters, one thread, ns per element) N = 1e8 (2.4 GB, where the gather misses the
+ * TLB at every element) 53.8-67.5 from the order against 43.4-44.8 from scratch (at N = 3e7,
+ * 720 MB, where the sort and the gather are the way from scratch there, steps 29.0-31.3
+ * against 39.9-42.8). So where cs_tune, a context times its first steps of a class
+ * (dimension, threads and the power of two of the input's bytes, as nbs__cs_way),
  * NBS__CS_TUNE_TRIES from the order and as many from scratch, alternating, each from the
  * detection's start to its search, and takes the faster from then on: run->fresh, set here,
  * makes a detection one from scratch. A start from the order right after a detection from
@@ -5069,6 +5072,15 @@ void nbs__cellsort_steps_way(nbs__run *run, nbs_algorithm asked) {
   const size_t bytes = nbs__input_bytes(n, run->dim, run->r != NULL);
   if (bytes <= NBS__CS_TUNE_MIN) return;
   const int cls = run->dim | nbs__cs_threads(run) << 2 | nbs__bits((uint64_t)bytes) << 10;
+  /* only where a detection from scratch partitions (nbs__cs_way: by size, or as measured):
+   * a step replaces the sort and the gather's key pass and sort by a pass and a merge, and
+   * keeps the gather, so it is never slower than they are */
+  const int *ways = ctx->cs_tune_tries;
+  if (bytes <= ctx->cs_part_min &&
+      !(cls == ctx->cs_tune_class && ways[0] >= NBS__CS_TUNE_TRIES &&
+        ways[1] >= NBS__CS_TUNE_TRIES && ctx->cs_tune_best[1] < ctx->cs_tune_best[0])) {
+    return;
+  }
   if (cls != ctx->cs_steps_class) {
     ctx->cs_steps_class = cls;
     ctx->cs_steps_tries[0] = ctx->cs_steps_tries[1] = 0;

@@ -170,9 +170,10 @@ struct nbs_context {
   int cs_tune_class;
   int cs_tune_tries[2];
   double cs_tune_best[2];
-  /* Likewise for time steps above NBS__CS_TUNE_MIN bytes, where cs_tune: whether a detection
-   * that could start from the last order does, or sorts from scratch (nbs__cs_steps_way; at
-   * 3D N = 1e8 a step's random gather of 2.4 GB costs more than a partition from scratch).
+  /* Likewise for time steps where cs_tune and a detection from scratch would partition (by
+   * size, or as measured): whether a detection that could start from the last order does,
+   * or sorts from scratch (nbs__cellsort_steps_way; at 3D N = 1e8 a step's random gather of
+   * 2.4 GB costs more than a partition from scratch).
    * cs_steps_tries[w] detections of way w (0 from the last order, with its keys, 1 from
    * scratch) timed for inputs of class cs_steps_class, the fastest cs_steps_best[w] seconds
    * per element from the detection's start to its search; once each has NBS__CS_TUNE_TRIES,

@@ -1103,15 +1103,18 @@ static void test_time_steps(void) {
   nbs_context_destroy(ref);
 }
 
-/* Time steps of inputs over 8 MiB (nbs__cellsort_steps_way): by default the context times
- * its first steps of a class from the last order and from scratch, two of each,
- * alternating, and takes the faster from then on. A start from the order just after a
- * detection from scratch writes the order's keys first, and is not timed (words with fewer
- * than 32 element bits have no keys, and every start from the order is timed); nor is a
- * start from the order that did not take place. Each branch of the choice is then forced
- * (the measurements set by hand) and followed; an input of another class measures again,
- * one below 8 MiB and a context under NBS_PARTITION=never never. Every step gives the bytes
- * of a detection from scratch, with one thread and two. */
+/* Time steps where a detection from scratch would partition (nbs__cellsort_steps_way): by
+ * default the context times its first steps of a class from the last order and from
+ * scratch, two of each, alternating, and takes the faster from then on. A start from the
+ * order just after a detection from scratch writes the order's keys first, and is not timed
+ * (words with fewer than 32 element bits have no keys, and every start from the order is
+ * timed); nor is a start from the order that did not take place. Each branch of the choice
+ * is then forced (the measurements set by hand) and followed; an input of another class
+ * measures again. The inputs here are of 9.6 MB, and the contexts' cs_part_min is set to 8 MiB
+ * (as if they were over 1 GiB); with the default 1 GiB, steps are timed only once the context
+ * has measured the partition faster from scratch for the class; below 8 MiB and under
+ * NBS_PARTITION=never never. Every step gives the bytes of a detection from scratch, with
+ * one thread and two. */
 static void tuned_steps_run(nbs_context *ctx, nbs_context *ref, scene *s, int threads,
                             bool eb32, const char *name) {
   uint64_t rng = 91;
@@ -1180,6 +1183,8 @@ static void test_tuned_steps(void) {
     ASSERT_OK(nbs_context_create(&cdef, &ref));
     ASSERT_OK(nbs_context_create(&cdef, &ctx));
     CHECK_TRUE(ctx->cs_tune && ctx->cs_steps_class == -1);
+    const size_t over = (size_t)8 << 20; /* the inputs' 9.6 MB pass it */
+    ctx->cs_part_min = over;
     tuned_steps_run(ctx, ref, &s3, threads, true, "3D");
     const int cls = ctx->cs_steps_class;
     /* another class (2D) measures again, in the same context */
@@ -1187,7 +1192,44 @@ static void test_tuned_steps(void) {
     CHECK_MSG(ctx->cs_steps_class != cls, "2D: the class of 3D's (%d)", cls);
     nbs_context_destroy(ctx);
     ASSERT_OK(nbs_context_create(&cdef, &ctx));
+    ctx->cs_part_min = over;
     tuned_steps_run(ctx, ref, &far, threads, false, "far");
+    nbs_context_destroy(ctx);
+    /* 1 GiB: the way from scratch is measured first (four detections from scratch); until
+     * the partition is found the faster, no step is timed; then they are */
+    ASSERT_OK(nbs_context_create(&cdef, &ctx));
+    {
+      uint64_t rng = 95;
+      nbs_stats st;
+      char what[96];
+      for (int k = 0; k < 4 && !test_failures; k++) {
+        pair_list got;
+        tuned_detect(ctx, &s3, true, &got);
+        pair_list_free(&got);
+      }
+      CHECK_MSG(ctx->cs_tune_tries[0] == 2 && ctx->cs_tune_tries[1] == 2,
+                "1 GiB, %d threads: the ways' tries %d and %d", threads, ctx->cs_tune_tries[0],
+                ctx->cs_tune_tries[1]);
+      for (int pass = 0; pass < 2 && !test_failures; pass++) {
+        /* pass 0: the sort and the gather measured the faster; 1: the partition */
+        ctx->cs_tune_best[0] = pass == 0 ? 1.0 : 2.0;
+        ctx->cs_tune_best[1] = pass == 0 ? 2.0 : 1.0;
+        /* (pass 1 starts after pass 0's steps from the order, with the keys: timed at once,
+         * then one from scratch, one untimed, one timed) */
+        const int reused[4] = {1, pass == 0, 1, 1};
+        const int tried[4][2] = {{pass, 0}, {pass, pass}, {pass, pass}, {2 * pass, pass}};
+        for (int k = 0; k < 4 && !test_failures; k++) {
+          det_move(&s3, k, 7, 0.01, &rng);
+          snprintf(what, sizeof what, "1 GiB, %d threads, %s faster, step %d", threads,
+                   pass ? "the partition" : "the gather", k);
+          det_step(ctx, ref, &s3, NBS_AUTO, NBS_MODE_CONTACTS, false, &st, what);
+          CHECK_MSG(st.reused_order == reused[k], "%s: reused %d", what, st.reused_order);
+          CHECK_MSG(ctx->cs_steps_tries[0] == tried[k][0] && ctx->cs_steps_tries[1] == tried[k][1],
+                    "%s: tries %d and %d, expected %d and %d", what, ctx->cs_steps_tries[0],
+                    ctx->cs_steps_tries[1], tried[k][0], tried[k][1]);
+        }
+      }
+    }
     nbs_context_destroy(ctx);
     /* below 8 MiB, and under NBS_PARTITION=never: every step from the order, none timed */
     ASSERT_OK(nbs_context_create(&cdef, &ctx));

@@ -225,10 +225,11 @@ NBS_API nbs_detect_def nbs_default_detect_def(void);
  * place and merges them into that order, instead of sorting all of them. The pairs and their order are exactly those of a
  * detection from scratch; only the time differs. Inputs that are not a later state of the
  * same elements are recognised early and sorted from scratch. def.fresh = 1 turns it off.
- * Where the input is over 8 MiB, the context times its first few steps both ways, from the
- * order and from scratch, and takes the faster from then on (the same pairs either way:
- * from scratch wins where the input is far larger than the caches, such as 10^8 spheres);
- * nbs_stats.reused_order says which a detection took.
+ * Where a detection from scratch would read the input in order rather than at random (over
+ * 1 GiB of input, or where the context has measured that faster), the context times its
+ * first few steps both ways, from the order and from scratch, and takes the faster from then
+ * on (the same pairs either way: from scratch wins at 10^8 spheres on the benchmark
+ * machine); nbs_stats.reused_order says which a detection took.
  * Without a callback the pairs replace the context's buffer (nbs_pairs); with one they are
  * delivered in batches and the buffer is left empty. After a first detection, a detection
  * with the same or a smaller n (and a domain of no more cells per axis) allocates nothing,
