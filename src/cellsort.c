@@ -2833,6 +2833,38 @@ static size_t nbs__cs_input_bytes(const nbs__cs *c) {
  *    way (test_determinism). */
 #define NBS__CS_TUNE_MIN ((size_t)8 << 20)
 #define NBS__CS_TUNE_TRIES 2
+
+/* The class of run's input for a nbs__tune: the dimension, the threads and the power of two
+ * of its bytes. */
+static int nbs__tune_class_of(const nbs__run *run, int threads, size_t bytes) {
+  return run->dim | threads << 2 | nbs__bits((uint64_t)bytes) << 10;
+}
+
+/* t measures class cls: its measurements start again where they were of another class. */
+static void nbs__tune_class(nbs__tune *t, int cls) {
+  if (cls == t->cls) return;
+  t->cls = cls;
+  t->tries[0] = t->tries[1] = 0;
+  t->best[0] = t->best[1] = 0.0;
+}
+
+/* Whether t has timed both ways enough to choose. */
+static bool nbs__tune_done(const nbs__tune *t) {
+  return t->tries[0] >= NBS__CS_TUNE_TRIES && t->tries[1] >= NBS__CS_TUNE_TRIES;
+}
+
+/* Whether way 1 is the faster (once nbs__tune_done). */
+static bool nbs__tune_second(const nbs__tune *t) { return t->best[1] < t->best[0]; }
+
+/* The way to try next: the one tried fewer times, way 0 first. */
+static int nbs__tune_next(const nbs__tune *t) { return t->tries[0] <= t->tries[1] ? 0 : 1; }
+
+/* A try of way w took `per` seconds per element. */
+static void nbs__tune_record(nbs__tune *t, int w, double per) {
+  if (t->tries[w] == 0 || per < t->best[w]) t->best[w] = per;
+  t->tries[w]++;
+}
+
 static int nbs__cs_way(nbs__run *run, int threads) {
   if (run->cs_way) return run->cs_way;
   nbs_context *ctx = run->ctx;
@@ -2841,17 +2873,12 @@ static int nbs__cs_way(nbs__run *run, int threads) {
   if (bytes > ctx->cs_part_min) {
     way = 2;
   } else if (ctx->cs_tune && bytes > NBS__CS_TUNE_MIN) {
-    const int cls = run->dim | threads << 2 | nbs__bits((uint64_t)bytes) << 10;
-    if (cls != ctx->cs_tune_class) {
-      ctx->cs_tune_class = cls;
-      ctx->cs_tune_tries[0] = ctx->cs_tune_tries[1] = 0;
-      ctx->cs_tune_best[0] = ctx->cs_tune_best[1] = 0.0;
-    }
-    const int *tries = ctx->cs_tune_tries;
-    if (tries[0] >= NBS__CS_TUNE_TRIES && tries[1] >= NBS__CS_TUNE_TRIES) {
-      way = ctx->cs_tune_best[1] < ctx->cs_tune_best[0] ? 2 : 1;
+    nbs__tune *t = &ctx->cs_ways;
+    nbs__tune_class(t, nbs__tune_class_of(run, threads, bytes));
+    if (nbs__tune_done(t)) {
+      way = nbs__tune_second(t) ? 2 : 1;
     } else {
-      way = tries[0] <= tries[1] ? 1 : 2;
+      way = 1 + nbs__tune_next(t);
       run->cs_try = true;
     }
   }
@@ -2861,22 +2888,18 @@ static int nbs__cs_way(nbs__run *run, int threads) {
 
 void nbs__cellsort_tried(nbs_context *ctx, const nbs__run *run, double seconds) {
   if (run->n <= 0) return;
+  const double per = seconds / (double)run->n;
   /* a time step's try (nbs__cellsort_steps_way): one from the order counts only where it
    * started from it (not where too many elements had moved), and either only where cellsort
    * ran (auto may have chosen another algorithm) */
   if (run->cs_step_try && run->ran == NBS_CELLSORT &&
       (run->cs_step_try == 2 || run->reused_order)) {
-    const int w = run->cs_step_try - 1;
-    const double per = seconds / (double)run->n;
-    if (ctx->cs_steps_tries[w] == 0 || per < ctx->cs_steps_best[w]) ctx->cs_steps_best[w] = per;
-    ctx->cs_steps_tries[w]++;
+    nbs__tune_record(&ctx->cs_steps, run->cs_step_try - 1, per);
   }
   if (!run->cs_tried) return; /* started from the last order: no try of the way */
-  const int w = run->cs_tried == 1 ? 0 : 1;
   /* the partition that could not run is never taken for this class */
-  const double per = run->cs_tried == 3 ? DBL_MAX : seconds / (double)run->n;
-  if (ctx->cs_tune_tries[w] == 0 || per < ctx->cs_tune_best[w]) ctx->cs_tune_best[w] = per;
-  ctx->cs_tune_tries[w]++;
+  nbs__tune_record(&ctx->cs_ways, run->cs_tried == 1 ? 0 : 1,
+                   run->cs_tried == 3 ? DBL_MAX : per);
 }
 
 /* Place p of the cell order (xs, ys, zs, rs) takes element e's coordinates (and radius)
@@ -5071,25 +5094,20 @@ void nbs__cellsort_steps_way(nbs__run *run, nbs_algorithm asked) {
   }
   const size_t bytes = nbs__input_bytes(n, run->dim, run->r != NULL);
   if (bytes <= NBS__CS_TUNE_MIN) return;
-  const int cls = run->dim | nbs__cs_threads(run) << 2 | nbs__bits((uint64_t)bytes) << 10;
+  const int cls = nbs__tune_class_of(run, nbs__cs_threads(run), bytes);
   /* only where a detection from scratch partitions (nbs__cs_way: by size, or as measured):
    * a step replaces the sort and the gather's key pass and sort by a pass and a merge, and
    * keeps the gather, so it is never slower than they are */
-  const int *ways = ctx->cs_tune_tries;
+  const nbs__tune *ways = &ctx->cs_ways;
   if (bytes <= ctx->cs_part_min &&
-      !(cls == ctx->cs_tune_class && ways[0] >= NBS__CS_TUNE_TRIES &&
-        ways[1] >= NBS__CS_TUNE_TRIES && ctx->cs_tune_best[1] < ctx->cs_tune_best[0])) {
+      !(cls == ways->cls && nbs__tune_done(ways) && nbs__tune_second(ways))) {
     return;
   }
-  if (cls != ctx->cs_steps_class) {
-    ctx->cs_steps_class = cls;
-    ctx->cs_steps_tries[0] = ctx->cs_steps_tries[1] = 0;
-    ctx->cs_steps_best[0] = ctx->cs_steps_best[1] = 0.0;
-  }
-  const int *tries = ctx->cs_steps_tries;
-  if (tries[0] >= NBS__CS_TUNE_TRIES && tries[1] >= NBS__CS_TUNE_TRIES) {
-    run->fresh = ctx->cs_steps_best[1] < ctx->cs_steps_best[0];
-  } else if (tries[0] <= tries[1]) {
+  nbs__tune *t = &ctx->cs_steps;
+  nbs__tune_class(t, cls);
+  if (nbs__tune_done(t)) {
+    run->fresh = nbs__tune_second(t);
+  } else if (nbs__tune_next(t) == 0) {
     /* from the order, timed where it has its keys (or needs none: nbs__cs_warm) */
     if (ctx->cs_order_eb != 32 || ctx->cs_keys) run->cs_step_try = 1;
   } else {

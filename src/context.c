@@ -293,8 +293,7 @@ nbs_status nbs_context_create(const nbs_context_def *def, nbs_context **out) {
   ctx->cs_part_min = nbs__cellsort_partition_min();
   ctx->cs_part_wide = nbs__cellsort_partition_wide();
   ctx->cs_tune = nbs__cellsort_tune();
-  ctx->cs_tune_class = -1;
-  ctx->cs_steps_class = -1;
+  ctx->cs_ways.cls = ctx->cs_steps.cls = -1;
   ctx->cs_steal_first = nbs__cellsort_steal_first();
   ctx->bytes = ctx->peak_bytes = sizeof *ctx;
   ctx->error_element = -1;

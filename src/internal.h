@@ -98,6 +98,17 @@ typedef struct nbs__cs_kept {
   int dim, sy, sz;
 } nbs__cs_kept;
 
+/* A choice between two ways of doing a detection, timed (cellsort.c, nbs__tune_*): the
+ * measurements are of inputs of class cls (dimension, threads and the power of two of the
+ * input's bytes; another class starts them again, -1 none yet): tries[w] detections of way w
+ * timed, the fastest of them best[w] seconds per element. Once each way has
+ * NBS__CS_TUNE_TRIES, the faster is taken. */
+typedef struct nbs__tune {
+  int cls;
+  int tries[2];
+  double best[2];
+} nbs__tune;
+
 struct nbs_context {
   nbs_allocator allocator;
   size_t cell_budget;
@@ -159,28 +170,15 @@ struct nbs_context {
    * nbs__cs_part_digits); cs_part_widened says whether the last partition widened it */
   bool cs_part_wide, cs_part_widened;
   /* Between NBS__CS_TUNE_MIN bytes and cs_part_min, which of the two ways a detection from
-   * scratch takes is measured (nbs__cs_way): cs_tune says so (NBS_PARTITION unset); the
-   * measurements are of inputs of class cs_tune_class (dimension, threads and the power of
-   * two of the input's bytes; another class starts them again): cs_tune_tries[w] detections
-   * of way w (0 the sort and the gather, 1 the partition) timed, the fastest of them
-   * cs_tune_best[w] seconds per element from the detection's start to its search (the
-   * partition's +infinity where it could not run). Once each way has NBS__CS_TUNE_TRIES,
-   * the faster one is taken. */
+   * scratch takes is measured (nbs__cs_way): cs_tune says so (NBS_PARTITION unset); in
+   * cs_ways, way 0 the sort and the gather, 1 the partition (+infinity where it could not
+   * run). Likewise, where cs_tune and a detection from scratch would partition (by size, or
+   * as cs_ways measured), whether a time step starts from the last order (way 0, with its
+   * keys) or sorts from scratch (1), in cs_steps (nbs__cellsort_steps_way; at 3D N = 1e8 a
+   * step's random gather of 2.4 GB costs more than a partition from scratch). Each time
+   * from the detection's start to its search. */
   bool cs_tune;
-  int cs_tune_class;
-  int cs_tune_tries[2];
-  double cs_tune_best[2];
-  /* Likewise for time steps where cs_tune and a detection from scratch would partition (by
-   * size, or as measured): whether a detection that could start from the last order does,
-   * or sorts from scratch (nbs__cellsort_steps_way; at 3D N = 1e8 a step's random gather of
-   * 2.4 GB costs more than a partition from scratch).
-   * cs_steps_tries[w] detections of way w (0 from the last order, with its keys, 1 from
-   * scratch) timed for inputs of class cs_steps_class, the fastest cs_steps_best[w] seconds
-   * per element from the detection's start to its search; once each has NBS__CS_TUNE_TRIES,
-   * the faster is taken. */
-  int cs_steps_class;
-  int cs_steps_tries[2];
-  double cs_steps_best[2];
+  nbs__tune cs_ways, cs_steps;
   /* cellsort's threaded sweep (nbs__cs_sweep_parts): the chunks the last detection's threads
    * took from other threads' parts (read by the tests), and NBS_STEAL=first, which
    * makes every thread take one first (nbs__cellsort_steal_first). */
@@ -269,7 +267,7 @@ typedef struct nbs__run {
   int8_t cs_way;
   bool cs_try;
   int8_t cs_tried;
-  /* This detection is one of the context's timed tries of its time steps (cs_steps_tries):
+  /* This detection is one of the context's timed tries of its time steps (cs_steps):
    * 1 from the last order, 2 from scratch (run->fresh set by nbs__cs_steps_way); 0 not a
    * try. */
   int8_t cs_step_try;
@@ -495,7 +493,7 @@ bool nbs__cellsort_tune(void);
  * its time from its start to its search, `seconds`, is recorded (nbs_context.cs_tune). */
 void nbs__cellsort_tried(nbs_context *ctx, const nbs__run *run, double seconds);
 /* Before a detection's pass over the input: where the context times its steps
- * (nbs_context.cs_steps_tries) and this detection could start from the last order, it may
+ * (nbs_context.cs_steps) and this detection could start from the last order, it may
  * be made one from scratch (run->fresh). */
 void nbs__cellsort_steps_way(nbs__run *run, nbs_algorithm asked);
 bool nbs__cellsort_steal_first(void);

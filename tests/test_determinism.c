@@ -810,16 +810,16 @@ static void test_tuned_way(void) {
         }
       }
       if (sc < 3) {
-        CHECK_MSG(tuned->cs_tune_tries[0] == 2 && tuned->cs_tune_tries[1] == 2,
+        CHECK_MSG(tuned->cs_ways.tries[0] == 2 && tuned->cs_ways.tries[1] == 2,
                   "%s, %d threads: %d and %d tries", names[sc], threads,
-                  tuned->cs_tune_tries[0], tuned->cs_tune_tries[1]);
-        const int faster = tuned->cs_tune_best[1] < tuned->cs_tune_best[0] ? 2 : 1;
+                  tuned->cs_ways.tries[0], tuned->cs_ways.tries[1]);
+        const int faster = tuned->cs_ways.best[1] < tuned->cs_ways.best[0] ? 2 : 1;
         CHECK_MSG(took[4] == faster, "%s, %d threads: took way %d, %d was faster", names[sc],
                   threads, took[4], faster);
       }
       if (sc == 2) {
-        CHECK_MSG(tuned->cs_tune_best[1] == DBL_MAX, "sheet: the partition's time %g",
-                  tuned->cs_tune_best[1]);
+        CHECK_MSG(tuned->cs_ways.best[1] == DBL_MAX, "sheet: the partition's time %g",
+                  tuned->cs_ways.best[1]);
       }
       pair_list_free(&ref);
     }
@@ -1139,13 +1139,13 @@ static void tuned_steps_run(nbs_context *ctx, nbs_context *ref, scene *s, int th
     /* (the first detection has no order of this n: a class measured before stays as it was
      * until the next) */
     CHECK_MSG(k == 0 ||
-                  (ctx->cs_steps_tries[0] == tried[0] && ctx->cs_steps_tries[1] == tried[1]),
-              "%s: tries %d and %d, expected %d and %d", what, ctx->cs_steps_tries[0],
-              ctx->cs_steps_tries[1], tried[0], tried[1]);
+                  (ctx->cs_steps.tries[0] == tried[0] && ctx->cs_steps.tries[1] == tried[1]),
+              "%s: tries %d and %d, expected %d and %d", what, ctx->cs_steps.tries[0],
+              ctx->cs_steps.tries[1], tried[0], tried[1]);
   }
   /* the choice, as measured: the faster way from then on (a start from the order after one
    * from scratch writes its keys first, so the second is the plain step) */
-  const bool fresh = ctx->cs_steps_best[1] < ctx->cs_steps_best[0];
+  const bool fresh = ctx->cs_steps.best[1] < ctx->cs_steps.best[0];
   for (int k = 0; k < 3 && !test_failures; k++) {
     det_move(s, k, 5, 0.01, &rng);
     snprintf(what, sizeof what, "%s, %d threads, chosen %s, step %d", name, threads,
@@ -1156,16 +1156,16 @@ static void tuned_steps_run(nbs_context *ctx, nbs_context *ref, scene *s, int th
   }
   /* either choice, forced */
   for (int way = 0; way < 2 && !test_failures; way++) {
-    ctx->cs_steps_best[way] = 1.0;
-    ctx->cs_steps_best[1 - way] = 2.0;
+    ctx->cs_steps.best[way] = 1.0;
+    ctx->cs_steps.best[1 - way] = 2.0;
     for (int k = 0; k < 3 && !test_failures; k++) {
       det_move(s, k, 5, 0.01, &rng);
       snprintf(what, sizeof what, "%s, %d threads, %s forced, step %d", name, threads,
                way ? "from scratch" : "from the order", k);
       det_step(ctx, ref, s, NBS_AUTO, NBS_MODE_CONTACTS, false, &st, what);
       CHECK_MSG(st.reused_order == (way == 0), "%s: reused %d", what, st.reused_order);
-      CHECK_MSG(ctx->cs_steps_tries[0] == 2 && ctx->cs_steps_tries[1] == 2,
-                "%s: tries %d and %d", what, ctx->cs_steps_tries[0], ctx->cs_steps_tries[1]);
+      CHECK_MSG(ctx->cs_steps.tries[0] == 2 && ctx->cs_steps.tries[1] == 2,
+                "%s: tries %d and %d", what, ctx->cs_steps.tries[0], ctx->cs_steps.tries[1]);
     }
   }
 }
@@ -1182,14 +1182,14 @@ static void test_tuned_steps(void) {
     nbs_context *ctx, *ref, *never;
     ASSERT_OK(nbs_context_create(&cdef, &ref));
     ASSERT_OK(nbs_context_create(&cdef, &ctx));
-    CHECK_TRUE(ctx->cs_tune && ctx->cs_steps_class == -1);
+    CHECK_TRUE(ctx->cs_tune && ctx->cs_steps.cls == -1);
     const size_t over = (size_t)8 << 20; /* the inputs' 9.6 MB pass it */
     ctx->cs_part_min = over;
     tuned_steps_run(ctx, ref, &s3, threads, true, "3D");
-    const int cls = ctx->cs_steps_class;
+    const int cls = ctx->cs_steps.cls;
     /* another class (2D) measures again, in the same context */
     tuned_steps_run(ctx, ref, &s2, threads, true, "2D");
-    CHECK_MSG(ctx->cs_steps_class != cls, "2D: the class of 3D's (%d)", cls);
+    CHECK_MSG(ctx->cs_steps.cls != cls, "2D: the class of 3D's (%d)", cls);
     nbs_context_destroy(ctx);
     ASSERT_OK(nbs_context_create(&cdef, &ctx));
     ctx->cs_part_min = over;
@@ -1207,13 +1207,13 @@ static void test_tuned_steps(void) {
         tuned_detect(ctx, &s3, true, &got);
         pair_list_free(&got);
       }
-      CHECK_MSG(ctx->cs_tune_tries[0] == 2 && ctx->cs_tune_tries[1] == 2,
-                "1 GiB, %d threads: the ways' tries %d and %d", threads, ctx->cs_tune_tries[0],
-                ctx->cs_tune_tries[1]);
+      CHECK_MSG(ctx->cs_ways.tries[0] == 2 && ctx->cs_ways.tries[1] == 2,
+                "1 GiB, %d threads: the ways' tries %d and %d", threads, ctx->cs_ways.tries[0],
+                ctx->cs_ways.tries[1]);
       for (int pass = 0; pass < 2 && !test_failures; pass++) {
         /* pass 0: the sort and the gather measured the faster; 1: the partition */
-        ctx->cs_tune_best[0] = pass == 0 ? 1.0 : 2.0;
-        ctx->cs_tune_best[1] = pass == 0 ? 2.0 : 1.0;
+        ctx->cs_ways.best[0] = pass == 0 ? 1.0 : 2.0;
+        ctx->cs_ways.best[1] = pass == 0 ? 2.0 : 1.0;
         /* (pass 1 starts after pass 0's steps from the order, with the keys: timed at once,
          * then one from scratch, one untimed, one timed) */
         const int reused[4] = {1, pass == 0, 1, 1};
@@ -1224,9 +1224,9 @@ static void test_tuned_steps(void) {
                    pass ? "the partition" : "the gather", k);
           det_step(ctx, ref, &s3, NBS_AUTO, NBS_MODE_CONTACTS, false, &st, what);
           CHECK_MSG(st.reused_order == reused[k], "%s: reused %d", what, st.reused_order);
-          CHECK_MSG(ctx->cs_steps_tries[0] == tried[k][0] && ctx->cs_steps_tries[1] == tried[k][1],
-                    "%s: tries %d and %d, expected %d and %d", what, ctx->cs_steps_tries[0],
-                    ctx->cs_steps_tries[1], tried[k][0], tried[k][1]);
+          CHECK_MSG(ctx->cs_steps.tries[0] == tried[k][0] && ctx->cs_steps.tries[1] == tried[k][1],
+                    "%s: tries %d and %d, expected %d and %d", what, ctx->cs_steps.tries[0],
+                    ctx->cs_steps.tries[1], tried[k][0], tried[k][1]);
         }
       }
     }
@@ -1250,9 +1250,9 @@ static void test_tuned_steps(void) {
         nbs_stats st;
         det_step(plain[p].c, ref, plain[p].s, NBS_AUTO, NBS_MODE_CONTACTS, false, &st, what);
         CHECK_MSG(st.reused_order == (k > 0), "%s: reused %d", what, st.reused_order);
-        CHECK_MSG(plain[p].c->cs_steps_tries[0] == 0 && plain[p].c->cs_steps_tries[1] == 0,
-                  "%s: tries %d and %d", what, plain[p].c->cs_steps_tries[0],
-                  plain[p].c->cs_steps_tries[1]);
+        CHECK_MSG(plain[p].c->cs_steps.tries[0] == 0 && plain[p].c->cs_steps.tries[1] == 0,
+                  "%s: tries %d and %d", what, plain[p].c->cs_steps.tries[0],
+                  plain[p].c->cs_steps.tries[1]);
       }
     }
     nbs_context_destroy(ctx);
