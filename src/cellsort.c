@@ -126,7 +126,7 @@
  * Either way a step still reads every coordinate once in the order's places, at random;
  * where a detection from scratch would take the partition, which reads the input in order,
  * the context times its first steps both from the order and from scratch and takes the
- * faster (nbs__cellsort_steps_way: at 3D N = 1e8, 2.4 GB, from scratch).
+ * faster (nbs__cs_steps_way: at 3D N = 1e8, 2.4 GB, from scratch).
  * Measured (3D, N = 1e6, fraction 0.5, random order, one thread, interleaved, min of 3-5
  * processes, ns per element; nbs_bench --move D against --fresh; the same bytes):
  *   nbs__cs_warm (before nbs__cs_rekey): from scratch 33.0-33.3, unmoved 29.6, steps of
@@ -1480,7 +1480,7 @@ bool nbs__cellsort_partition_wide(void) {
 
 /* Whether a context measures which way its detections from scratch take below that size
  * (nbs__cs_way), and whether its time steps start from the last order or from scratch
- * (nbs__cellsort_steps_way): unless NBS_PARTITION says "always" or "never" (then every step
+ * (nbs__cs_steps_way): unless NBS_PARTITION says "always" or "never" (then every step
  * that can starts from the order), read when the context is created. */
 bool nbs__cellsort_tune(void) {
   const char *e = getenv("NBS_PARTITION");
@@ -2889,7 +2889,7 @@ static int nbs__cs_way(nbs__run *run, int threads) {
 void nbs__cellsort_tried(nbs_context *ctx, const nbs__run *run, double seconds) {
   if (run->n <= 0) return;
   const double per = seconds / (double)run->n;
-  /* a time step's try (nbs__cellsort_steps_way): one from the order counts only where it
+  /* a time step's try (nbs__cs_steps_way): one from the order counts only where it
    * started from it (not where too many elements had moved), and either only where cellsort
    * ran (auto may have chosen another algorithm) */
   if (run->cs_step_try && run->ran == NBS_CELLSORT &&
@@ -4659,9 +4659,9 @@ static void nbs__cs_core_merge(const nbs__cs *c, const nbs__run *run, const nbs_
  * does as well), where the partition would not (too few elements for the digits, a bucket too
  * large: nbs__cs_part_fits), or where the buffers and the outliers' list do not fit spare.
  * Where the even split's top digit would leave its buckets too large (3D clustered N = 1e8, a
- * core of 30 bits), the top digit is widened as nbs__cs_partition's (nbs__cs_part_digits). A sparse domain's core at N = 1e8 (fraction 0.005, 2188 cells
- * per axis) takes 37 bits, which with the element's 27 do not fit a word: that detection still
- * sorts and gathers. */
+ * core of 30 bits), the top digit is widened as nbs__cs_partition's (nbs__cs_part_digits). A
+ * sparse domain's core at N = 1e8 (fraction 0.005, 2188 cells per axis) takes 37 bits, which
+ * with the element's 27 do not fit a word: that detection still sorts and gathers. */
 static bool nbs__cs_core_part(const nbs__cs *c, const nbs__run *run, const nbs__cs_keying *kg,
                               int eb, int bits, uint32_t *hist, int threads, char *spare,
                               size_t spare_bytes) {
@@ -4680,7 +4680,6 @@ static bool nbs__cs_core_part(const nbs__cs *c, const nbs__run *run, const nbs__
    * whole keys' had. */
   const nbs__cs_pdigits pd = nbs__cs_part_digits(n, cb, run->ctx->cs_part_wide);
   if (!nbs__cs_part_top_first(n, &pd)) return false;
-  const nbs__digits dg = pd.lo; /* dg0 where not widened */
   box.pad = pd.wide ? 0 : dg0.passes * dg0.width - cb;
   if (cb + box.pad + eb > 62) return false;
   /* the whole keys of the box's lowest and highest positions within the fields' ranges
@@ -4695,8 +4694,9 @@ static bool nbs__cs_core_part(const nbs__cs *c, const nbs__run *run, const nbs__
     }
     box.wmax = hi[2] << kg->sz | hi[1] << kg->sy | hi[0];
   }
+  /* (unwidened, pd.shift is the even split's, (passes - 1) * width, on the padded keys) */
   const size_t B = pd.buckets;
-  const int kshift = pd.wide ? pd.shift : (dg0.passes - 1) * dg0.width;
+  const int kshift = pd.shift;
   const uint64_t dmask = B - 1;
   uint64_t bound[(size_t)1 << NBS__RADIX_BITS];
   uint32_t between[(size_t)1 << NBS__RADIX_BITS], mfrom[((size_t)1 << NBS__RADIX_BITS) + 1];
@@ -4798,7 +4798,7 @@ static bool nbs__cs_core_part(const nbs__cs *c, const nbs__run *run, const nbs__
       /* e (each thread's histogram at the widest digit's stride, as in nbs__cs_partition:
        * a widened top digit may be narrower than those below it) */
       NBS__PARTS(t, threads) {
-        nbs__cs_part_buckets(c, run, &d, t, threads, top, B, eb, dg,
+        nbs__cs_part_buckets(c, run, &d, t, threads, top, B, eb, pd.lo,
                              hist + (size_t)t * ((size_t)1 << NBS__RADIX_BITS), most,
                              spare + (size_t)t * per, &box, kg, mfrom, se + below);
       }
@@ -5081,13 +5081,10 @@ static nbs__cs_kept nbs__cs_kept_of(const nbs__cs_keying *kg) {
  * scratch writes the order's keys first (nbs__cs_keys_of), which a step does not: it is not
  * timed. A try costs at most the difference between the two ways, once; the output is the
  * same bytes either way (test_determinism tuned_steps). */
-void nbs__cellsort_steps_way(nbs__run *run, nbs_algorithm asked) {
+static void nbs__cs_steps_way(nbs__run *run) {
   nbs_context *ctx = run->ctx;
   const int32_t n = run->n;
-  run->cs_step_try = 0;
-  if (!ctx->cs_tune || run->fresh || n < 2 || (asked != NBS_AUTO && asked != NBS_CELLSORT)) {
-    return;
-  }
+  if (!ctx->cs_tune || run->fresh) return;
   /* an order this detection would start from (nbs__cellsort, step 0) */
   if (ctx->work_kind != NBS__WORK_CELLSORT || ctx->cs_order_n != n || ctx->cs_warm_wait > 0) {
     return;
@@ -5122,9 +5119,9 @@ bool nbs__cellsort_step(nbs__run *run, const nbs_input *in, nbs_algorithm asked)
   const int dim = run->dim;
   run->stepped = false;
   run->step_over = false;
-  if (run->fresh || n < 2 || (asked != NBS_AUTO && asked != NBS_CELLSORT)) {
-    return false;
-  }
+  if (n < 2 || (asked != NBS_AUTO && asked != NBS_CELLSORT)) return false;
+  nbs__cs_steps_way(run); /* may make this detection one from scratch (run->fresh) */
+  if (run->fresh) return false;
   if (!ctx->cs_kept_ok || !ctx->cs_keys || ctx->cs_warm_wait > 0 ||
       ctx->work_kind != NBS__WORK_CELLSORT || ctx->cs_order_n != n || ctx->cs_order_eb != 32 ||
       ctx->cs_kept.dim != dim) {

@@ -462,10 +462,8 @@ static nbs_status nbs__detect(nbs_context *ctx, const nbs_input *in, const nbs_d
   ctx->cs_fresh_words = false;
   NBS__TRY(nbs__prepare_args(&run, in));
   /* A time step of cellsort reads the input once, validating it and measuring its bounds
-   * as it computes each element's key (nbs__cellsort_step); else input.c's pass. Large
-   * inputs' steps may be taken from scratch instead, where that is faster
-   * (nbs__cellsort_steps_way). */
-  nbs__cellsort_steps_way(&run, d.algorithm);
+   * as it computes each element's key (nbs__cellsort_step); else input.c's pass. (A large
+   * input's step may be made one from scratch there, where that is faster.) */
   if (!nbs__cellsort_step(&run, in, d.algorithm) && !nbs__cellsort_fresh(&run, in, d.algorithm)) {
     NBS__TRY(nbs__prepare_scan(&run, in));
   }

@@ -174,7 +174,7 @@ struct nbs_context {
    * cs_ways, way 0 the sort and the gather, 1 the partition (+infinity where it could not
    * run). Likewise, where cs_tune and a detection from scratch would partition (by size, or
    * as cs_ways measured), whether a time step starts from the last order (way 0, with its
-   * keys) or sorts from scratch (1), in cs_steps (nbs__cellsort_steps_way; at 3D N = 1e8 a
+   * keys) or sorts from scratch (1), in cs_steps (nbs__cs_steps_way; at 3D N = 1e8 a
    * step's random gather of 2.4 GB costs more than a partition from scratch). Each time
    * from the detection's start to its search. */
   bool cs_tune;
@@ -492,10 +492,6 @@ bool nbs__cellsort_tune(void);
 /* After a detection that succeeded: where it was one of cellsort's timed tries (run->cs_try),
  * its time from its start to its search, `seconds`, is recorded (nbs_context.cs_tune). */
 void nbs__cellsort_tried(nbs_context *ctx, const nbs__run *run, double seconds);
-/* Before a detection's pass over the input: where the context times its steps
- * (nbs_context.cs_steps) and this detection could start from the last order, it may
- * be made one from scratch (run->fresh). */
-void nbs__cellsort_steps_way(nbs__run *run, nbs_algorithm asked);
 bool nbs__cellsort_steal_first(void);
 
 /* Work-block layouts, for work_kind. */

@@ -444,7 +444,7 @@ typedef struct nbs__nbs_block {
   nbs__nbs_entry *e; /* the entries */
   double *r;         /* a radius per entry, or NULL */
   int32_t *Y;        /* the entry's link in the y-lists (3D; NULL in 2D) */
-  bool far;          /* larger than a core's L2: the rows' walks look ahead (nbs__nbs_3d_row) */
+  bool ahead;        /* larger than a core's L2: the rows' walks look ahead (nbs__nbs_3d_row) */
 } nbs__nbs_block;
 
 /* Bytes of one entry of the block: the entry, its radius, and in 3D its y-link. */
@@ -798,13 +798,13 @@ static nbs_status nbs__nbs_block_reserve(nbs__run *run, int32_t need, nbs__nbs_b
     w += (size_t)need * sizeof(double);
   }
   K->Y = run->dim == 3 ? (int32_t *)(void *)w : NULL;
-  K->far = ((size_t)need + 1) * entry > NBS__NBS_AHEAD_MIN;
+  K->ahead = ((size_t)need + 1) * entry > NBS__NBS_AHEAD_MIN;
   return NBS_OK;
 }
 
 /* Steps 6-10 for the central row iy of the central layer (set 0 of the y-lists, B0), whose
  * neighbouring rows of eq. 3.79 are (iy-1,iz) in B0 and three rows of layer iz-1 in B1.
- * With `ahead` (the block is larger than a core's L2, K->far), each walk of steps 6-7 asks
+ * With `ahead` (the block is larger than a core's L2, K->ahead), each walk of steps 6-7 asks
  * for the entry NBS__NBS_AHEAD places further down its list (see NBS__NBS_AHEAD). */
 static inline __attribute__((always_inline)) nbs_status
 nbs__nbs_3d_row(nbs__run *run, const nbs__nbs_layout *L, const nbs__nbs_axes *g,
@@ -829,20 +829,21 @@ nbs__nbs_3d_row(nbs__run *run, const nbs__nbs_layout *L, const nbs__nbs_axes *g,
    * receive the same entries, set 1's in another order. */
   int32_t na0 = 0, na1 = 0;
   int32_t w[5] = {row, nrow[0], nrow[1], nrow[2], nrow[3]};
-  int32_t far[5] = {NBS__EMPTY, NBS__EMPTY, NBS__EMPTY, NBS__EMPTY, NBS__EMPTY};
+  /* the look-ahead cursors (NBS__EMPTY without `ahead`) */
+  int32_t lead[5] = {NBS__EMPTY, NBS__EMPTY, NBS__EMPTY, NBS__EMPTY, NBS__EMPTY};
   if (ahead) {
     for (int l = 0; l < 5; l++) {
       int32_t f = w[l];
       for (int d = 0; d < NBS__NBS_AHEAD && f != NBS__EMPTY; d++) f = Y[f];
-      far[l] = f;
+      lead[l] = f;
     }
   }
   while ((w[0] & w[1] & w[2] & w[3] & w[4]) != NBS__EMPTY) { /* EMPTY is all ones */
     for (int l = 0; l < 5; l++) {
       if (w[l] == NBS__EMPTY) continue;
-      if (ahead && far[l] != NBS__EMPTY) {
-        __builtin_prefetch(&K->e[far[l]]);
-        far[l] = Y[far[l]];
+      if (ahead && lead[l] != NBS__EMPTY) {
+        __builtin_prefetch(&K->e[lead[l]]);
+        lead[l] = Y[lead[l]];
       }
       const int32_t next = Y[w[l]];
       if (l == 0) {
@@ -886,7 +887,7 @@ nbs__nbs_3d_layer(nbs__run *run, const nbs__nbs_layout *L, const nbs__nbs_axes *
     int32_t iy = RB0[i];
     if (nbs__is_marked(B0[iy])) continue; /* central already, in a chain of rows */
     do {
-      if (K->far) {
+      if (K->ahead) {
         NBS__TRY(nbs__nbs_3d_row(run, L, g, K, iy, true));
       } else {
         NBS__TRY(nbs__nbs_3d_row(run, L, g, K, iy, false));

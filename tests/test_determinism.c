@@ -1069,18 +1069,14 @@ static void test_time_steps(void) {
   /* An input over 8 MiB (cellsort's NBS__CS_PREFETCH_MIN), where the gathers prefetch:
    * the gather from scratch and that of nbs__cs_rekey, with one thread and two, and two
    * with NBS_STEAL=first (each thread first gathers, sorts buckets of and sweeps the end
-   * of the other's part: ranges taken from another's part, in all three). NBS_PARTITION=never:
-   * from scratch the gather, and every step from the order (a context that times its ways
-   * would take some steps from scratch: tuned_steps). */
+   * of the other's part: ranges taken from another's part, in all three). */
   for (int threads = 1; threads <= 3 && !test_failures; threads++) {
     nbs_context_def cdef = nbs_default_context_def();
     cdef.threads = threads == 3 ? 2 : threads;
     if (threads == 3) ASSERT_TRUE(setenv("NBS_STEAL", "first", 1) == 0);
-    ASSERT_TRUE(setenv("NBS_PARTITION", "never", 1) == 0);
     nbs_context *lctx;
     ASSERT_OK(nbs_context_create(&cdef, &lctx));
     unsetenv("NBS_STEAL");
-    unsetenv("NBS_PARTITION");
     scene big = det_scene(DET_UNIFORM, 3, 380000, 70.0, 1.18, 45);
     uint64_t rng = 78;
     for (int k = 0; k < 5 && !test_failures; k++) {
@@ -1103,7 +1099,7 @@ static void test_time_steps(void) {
   nbs_context_destroy(ref);
 }
 
-/* Time steps where a detection from scratch would partition (nbs__cellsort_steps_way): by
+/* Time steps where a detection from scratch would partition (nbs__cs_steps_way): by
  * default the context times its first steps of a class from the last order and from
  * scratch, two of each, alternating, and takes the faster from then on. A start from the
  * order just after a detection from scratch writes the order's keys first, and is not timed
