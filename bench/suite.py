@@ -10,7 +10,7 @@ Every nbs row is a detection from scratch (nbs_bench --fresh): the same elements
 again are not a time step, and cellsort would find them already in order. Time steps are
 rows of their own, nbs-ALG-steps (--steps; --step-scenes, uniform and huge): every element
 moves by up to D diameters per axis before each detection (not timed), the context kept
-from step to step, as in a simulation; they agree when the last step's pairs are the bytes
+from step to step, as in a simulation, at least --step-repeats steps; they agree when the last step's pairs are the bytes
 of a detection from scratch of the same coordinates (same_as_fresh), since moved elements
 have other contacts.
 
@@ -161,7 +161,10 @@ class Suite:
                 for r in res if ratio else []:
                     r["core_ratio"] = f"{ratio:.2f}"
                 keep(res, "-1t" if t == 1 else "")
+            # at least --step-repeats steps: a context that times its first steps from the
+            # last order against from scratch (nbs.h, "time steps") has chosen by the sixth
             steps = [x for x in timing if x != "--fresh"] + ["--move", repr(a.steps)]
+            steps[steps.index("--repeats") + 1] = str(max(a.repeats, a.step_repeats))
             for t in counts if salgs else []:
                 res, err = self.run_cmd([f"{self.bin}/nbs_bench", "--file", path, "--dim",
                                          str(dim), "--threads", str(t), "--algorithms",
@@ -1017,6 +1020,9 @@ def main(argv):
     ap.add_argument("--steps", type=float, default=1e-3,
                     help="time-step rows (nbs-ALG-steps, --step-scenes): each element moves "
                          "up to this many diameters per axis per step (0: none)")
+    ap.add_argument("--step-repeats", type=int, default=10,
+                    help="time steps per time-step row at the fewest (more with --repeats); "
+                         "the row keeps the fastest")
     ap.add_argument("--step-algorithms", default="auto")
     ap.add_argument("--step-scenes", default="uniform,huge",
                     help="scenes with time-step rows: uniform (the targets read it), and the "
