@@ -292,6 +292,7 @@ nbs_status nbs_context_create(const nbs_context_def *def, nbs_context **out) {
   ctx->simd = nbs__cellsort_simd();
   ctx->cs_part_min = nbs__cellsort_partition_min();
   ctx->cs_part_wide = nbs__cellsort_partition_wide();
+  ctx->nbs_rows = nbs__nbs_rows_mode();
   ctx->cs_tune = nbs__cellsort_tune();
   ctx->cs_ways.cls = ctx->cs_steps.cls = -1;
   ctx->cs_steal_first = nbs__cellsort_steal_first();

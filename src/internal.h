@@ -129,6 +129,10 @@ struct nbs_context {
    * counted the layers (munjiza_nbs.c). Nothing in it lives from one detection to the next. */
   void *nbs_block;
   size_t nbs_block_size;
+  /* Whether NBS (3D) puts each central layer's rows together in its block: by the block's
+   * size (0), always (1) or never (-1), from NBS_NBS_ROWS when the context was created
+   * (nbs__nbs_rows_mode; munjiza_nbs.c, "Rows together"). */
+  int8_t nbs_rows;
   /* cellsort's cell order: when work_kind is NBS__WORK_CELLSORT and cs_order_n is n (> 0),
    * the work block's key array holds the packed words (key << eb | element) of the last
    * detection of n elements, sorted: the next detection may start from it (cellsort.c),
@@ -488,6 +492,7 @@ nbs__twice4(const int32_t *p) {
 #endif
 size_t nbs__cellsort_partition_min(void);
 bool nbs__cellsort_partition_wide(void);
+int8_t nbs__nbs_rows_mode(void);
 bool nbs__cellsort_tune(void);
 /* After a detection that succeeded: where it was one of cellsort's timed tries (run->cs_try),
  * its time from its start to its search, `seconds`, is recorded (nbs_context.cs_tune). */

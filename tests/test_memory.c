@@ -25,8 +25,8 @@ static nbs__run prepared_run(nbs_context *ctx, const nbs_input *in) {
  * below it hold together, on the grid the library derives (nbs__prepare), along the axis
  * NBS takes for its layers (nbs__axis_order) and with that axis folded as the library folds
  * it (nbs__nbs_fold: layer iz is list iz mod m, and the list below list 0 is list m - 1);
- * at least 1. */
-static int64_t nbs_block_entries(nbs_context *ctx, const nbs_input *in) {
+ * at least 1; and in *fullest the most elements one layer (row) holds, at least 1. */
+static int64_t nbs_block_entries(nbs_context *ctx, const nbs_input *in, int64_t *fullest) {
   nbs__run run = prepared_run(ctx, in);
   int64_t lists[3];
   nbs__nbs_fold(&run, lists);
@@ -41,9 +41,11 @@ static int64_t nbs_block_entries(nbs_context *ctx, const nbs_input *in) {
     count[nbs__cell(&run.grid, in->coords + in->dim * k, a) % nz]++;
   }
   int64_t most = 1;
+  *fullest = 1;
   for (int64_t iz = 0; iz < nz; iz++) {
     const int64_t below = iz > 0 ? count[iz - 1] : folded ? count[nz - 1] : 0;
     if (count[iz] > 0 && count[iz] + below > most) most = count[iz] + below;
+    if (count[iz] > *fullest) *fullest = count[iz];
   }
   free(count);
   return most;
@@ -84,10 +86,21 @@ static void test_nbs_formula(void) {
         const int64_t entry = 32 + (in.radii ? 8 : 0) + (dim == 3 ? 4 : 0);
         /* the block: the two fullest neighbouring layers M and a first detection's slack of
          * ceil(4 sqrt(M)) entries, at most n in all */
-        const int64_t most = nbs_block_entries(ctx, &in);
+        int64_t fullest;
+        const int64_t most = nbs_block_entries(ctx, &in, &fullest);
         int64_t block = most + (int64_t)ceil(4.0 * sqrt((double)most));
         if (block > n) block = n;
         int64_t formula = ints * 4 + (block + 1) * entry;
+        /* 3D with each layer's rows together (the block's need past 512 KiB, or
+         * NBS_NBS_ROWS=always): a copy of the fullest layer after the block, on 8 bytes, of
+         * 32 bytes per entry (40 with radii) and the same slack */
+        if (dim == 3 && (nbs__nbs_rows_mode() > 0 ||
+                         (nbs__nbs_rows_mode() == 0 && (most + 1) * entry > (512 << 10)))) {
+          int64_t copy = fullest + (int64_t)ceil(4.0 * sqrt((double)fullest));
+          if (copy > n) copy = n;
+          formula = ints * 4 + (((block + 1) * entry + 7) & ~(int64_t)7) +
+                    copy * (32 + (in.radii ? 8 : 0));
+        }
         int64_t extra = (int64_t)st.work_bytes - formula;
         CHECK_MSG(extra >= 0 && extra <= 128,
                   "%dD %s n=%lld fraction %g: NBS holds %zu work bytes, the formula %lld",

@@ -235,8 +235,10 @@ NBS_API nbs_detect_def nbs_default_detect_def(void);
  * with the same or a smaller n (and a domain of no more cells per axis) allocates nothing,
  * unless it finds more pairs than the buffer has held before, or, with NBS, its two fullest
  * neighbouring layers (2D: rows) hold more elements than its layer block has room for: the
- * first detection's two fullest and four standard deviations of that count more, which a
- * simulation's steps stay within unless its elements crowd into fewer layers. With threads
+ * first detection's two fullest and four standard deviations of that count more (in 3D with
+ * a block over 512 KiB, likewise its fullest layer for the copy its rows are laid out
+ * through), which a simulation's steps stay within unless its elements crowd into fewer
+ * layers. With threads
  * (cellsort, and auto), each thread stages its pairs in a list of its own, which grows (by
  * half again) when the thread finds more than it has room for: the threads share the work
  * by the cores' speeds, so their shares move from step to step, and such steps come, more
