@@ -171,8 +171,8 @@
  * 43.4. Measured (Zen 4, 3D, fraction 0.5, random order, one thread, interleaved, min /
  * median of 6-8 processes of three detections, ns per element): N = 1e6 113.5 / 138.6 ->
  * 107.8 / 133.4, 1e7 125.2 / 132.1 -> 109.1 / 127.1; the clustered scene at 1e6 (one core
- * busy beside it) 143.9 / 149.2 -> 106.3 / 131.3; cell order at 1e6 76.9 / 81.0 -> 78.6 /
- * 83.2 (a few layers taken apart); below 512 KiB unchanged (N = 1e4, always put in rows:
+ * busy beside it) 143.9 / 149.2 -> 106.3 / 131.3; cell order at 1e6 (the same) 76.9 / 81.0 ->
+ * 78.6 / 83.2 (a few layers taken apart); below 512 KiB unchanged (N = 1e4, always put in rows:
  * 75.0 -> 79.5; 1e5 even). NBS_NBS_ROWS=always or never, read when a context is created,
  * overrides the size, for the tests and for comparisons.
  *
@@ -799,9 +799,9 @@ static int64_t nbs__nbs_block_cap(int64_t need, int64_t n, bool grown) {
  *    N = 1e6 in 3D): the two fullest layers of a scene whose elements move about hold a
  *    few sqrt(need) more or less from step to step. Allocated exactly, the block grew within
  *    the first 40 steps of a random walk (N = 5000 to 1e6, 3D and 2D, steps of 0.02
- *    diameters; at the first or second in 3D), which the header's promise of no allocation after the first detection
- *    does not allow; with the slack, none in 1000 steps (tests/test_memory.c,
- *    nbs_block_steps);
+ *    diameters; at the first or second in 3D), which the header's promise of no allocation
+ *    after the first detection does not allow; with the slack, none in 1000 steps
+ *    (tests/test_memory.c, nbs_block_steps);
  *  - a later, larger need (the elements crowd into fewer layers), an eighth more, so that a
  *    scene whose layers fill up step after step does not allocate every time. */
 static nbs_status nbs__nbs_block_reserve(nbs__run *run, int32_t need, int32_t layer,
