@@ -171,10 +171,11 @@
  * 43.4. Measured (Zen 4, 3D, fraction 0.5, random order, one thread, interleaved, min /
  * median of 6-8 processes of three detections, ns per element): N = 1e6 113.5 / 138.6 ->
  * 107.8 / 133.4, 1e7 125.2 / 132.1 -> 109.1 / 127.1; the clustered scene at 1e6 (one core
- * busy beside it) 143.9 / 149.2 -> 106.3 / 131.3; cell order at 1e6 (the same) 76.9 / 81.0 ->
- * 78.6 / 83.2 (a few layers taken apart); below 512 KiB unchanged (N = 1e4, always put in rows:
- * 75.0 -> 79.5; 1e5 even). NBS_NBS_ROWS=always or never, read when a context is created,
- * overrides the size, for the tests and for comparisons.
+ * busy beside it) 143.9 / 149.2 -> 106.3 / 131.3, quiet 123.7 / 142.6 -> 112.7 / 118.7; cell
+ * order at 1e6, every layer left as it is, 82.3 / 89.7 -> 79.2 / 102.2 (the same pairs in
+ * the same order: the sample's cost, within the noise); below 512 KiB unchanged (N = 1e4,
+ * always put in rows: 75.0 -> 79.5; 1e5 even). NBS_NBS_ROWS=always or never, read when a
+ * context is created, overrides the size, for the tests and for comparisons.
  *
  * Measured on the 2-core AMD EPYC of bench/README.md, N = 1e6, fraction 0.5, random order,
  * one thread, before and after the deviations that are about speed, back to back: 3D 548 ->
@@ -1024,8 +1025,9 @@ static void nbs__nbs_rows(const nbs__nbs_axes *g, const nbs__nbs_block *K, int32
   nbs__nbs_entry *restrict E = K->e;
   int32_t *restrict Y = K->Y;
   /* Already in rows, or near enough: of every 16th entry and the one after it, at most one
-   * pair in 8 in two rows (in random order nearly all are; in cell order, whose cells need
-   * not be NBS's, a row's entries come in a few runs of dozens) */
+   * pair in 4 in two rows (in random order nearly all are; in cell order, whose cells need
+   * not be NBS's, a row's entries come in a few runs of dozens, and with one in 8 a few of
+   * its layers were still laid out again, at a cost) */
   int32_t pairs = 0, apart = 0;
   for (int32_t j = 0; j + 1 < len; j += 16) {
     int32_t l = s + j;
@@ -1034,7 +1036,7 @@ static void nbs__nbs_rows(const nbs__nbs_axes *g, const nbs__nbs_block *K, int32
     apart += nbs__nbs_at(g, E[l].x, 1) != nbs__nbs_at(g, E[l1].x, 1);
     pairs++;
   }
-  if (8 * apart <= pairs) return;
+  if (4 * apart <= pairs) return;
   /* the rows' counts; the entries copied, in order */
   for (int32_t i = 0; i < nr; i++) H[R[i]] = 0;
   for (int32_t j = 0, l = s; j < len; j++) {
