@@ -10,9 +10,9 @@ Every nbs row is a detection from scratch (nbs_bench --fresh): the same elements
 again are not a time step, and cellsort would find them already in order. Time steps are
 rows of their own, nbs-ALG-steps (--steps; --step-scenes, uniform and huge): every element
 moves by up to D diameters per axis before each detection (not timed), the context kept
-from step to step, as in a simulation, at least --step-repeats steps; they agree when the last step's pairs are the bytes
-of a detection from scratch of the same coordinates (same_as_fresh), since moved elements
-have other contacts.
+from step to step, as in a simulation, for at least --step-repeats steps; they agree when
+the last step's pairs are the bytes of a detection from scratch of the same coordinates
+(same_as_fresh), since moved elements have other contacts.
 
 Results: <out>/results.csv (one row per case and tool), <out>/summary.md (headline table
 and targets, computed from the rows), <out>/machine.txt and PNG plots.

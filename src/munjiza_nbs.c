@@ -277,11 +277,6 @@
 #define NBS__NBS_AHEAD 8
 #define NBS__NBS_AHEAD_MIN ((size_t)1 << 20)
 
-/* Rows together (3D; see nbs__nbs_rows): where the block is larger than this. Below it, in a
- * core's L2 with room to spare, the entries' order costs little, and putting them in order
- * only costs (N = 1e4, a block of 33 kB: 75.0 -> 79.5 ns per element; 1e5, 170 kB, even). */
-#define NBS__NBS_ROWS_MIN ((size_t)512 << 10)
-
 int8_t nbs__nbs_rows_mode(void) {
   const char *e = getenv("NBS_NBS_ROWS");
   if (e && strcmp(e, "always") == 0) return 1;
@@ -481,9 +476,10 @@ typedef struct nbs__nbs_block {
   nbs__nbs_entry *e; /* the entries */
   double *r;         /* a radius per entry, or NULL */
   int32_t *Y;        /* the entry's link in the y-lists (3D; NULL in 2D) */
-  bool ahead;        /* larger than a core's L2: the rows' walks look ahead (nbs__nbs_3d_row) */
-  bool rows;         /* each central layer's rows are put together (nbs__nbs_rows; 3D) */
-  nbs__nbs_entry *se; /* with rows: room for the largest layer's entries (nbs__nbs_rows) */
+  bool ahead;        /* larger than a core's L2, rows not together: the rows' walks look ahead
+                      (nbs__nbs_3d_row) */
+  nbs__nbs_entry *se; /* rows together (nbs__nbs_rows; 3D): room for the fullest layer's
+                       entries; else NULL */
   double *sr;        /* and their radii, or NULL */
 } nbs__nbs_block;
 
@@ -805,6 +801,15 @@ static int64_t nbs__nbs_block_cap(int64_t need, int64_t n, bool grown) {
  *    (tests/test_memory.c, nbs_block_steps);
  *  - a later, larger need (the elements crowd into fewer layers), an eighth more, so that a
  *    scene whose layers fill up step after step does not allocate every time. */
+/* Bytes of a layer block of `need` entries (`entry` bytes each) and the sentinel, and with
+ * `rows` the copy of a layer after it, on 8 bytes (the block's int32 arrays may end on 4), of
+ * `layer` entries of `copy` bytes. */
+static size_t nbs__nbs_block_bytes(int64_t need, int64_t layer, size_t entry, size_t copy,
+                                   bool rows) {
+  const size_t block = ((size_t)need + 1) * entry;
+  return rows ? ((block + 7) & ~(size_t)7) + (size_t)layer * copy : block;
+}
+
 static nbs_status nbs__nbs_block_reserve(nbs__run *run, int32_t need, int32_t layer,
                                          nbs__nbs_block *K) {
   nbs_context *ctx = run->ctx;
@@ -818,21 +823,16 @@ static nbs_status nbs__nbs_block_reserve(nbs__run *run, int32_t need, int32_t la
     return nbs__fail(ctx, NBS_ERR_NOMEM, -1,
                      "nbs: a layer block of up to %ld entries cannot be addressed", (long)run->n);
   }
-  const size_t block = ((size_t)need + 1) * entry; /* and the sentinel entry */
+  const size_t block = nbs__nbs_block_bytes(need, 0, entry, copy, false);
   /* Rows together (3D): where the block is past NBS__NBS_ROWS_MIN, or as NBS_NBS_ROWS says */
   const bool rows =
       run->dim == 3 && (ctx->nbs_rows > 0 || (ctx->nbs_rows == 0 && block > NBS__NBS_ROWS_MIN));
-  /* the copy after the block, on an entry's alignment (8: the block's int32 arrays may end
-   * on 4) */
-  const size_t at = (block + 7) & ~(size_t)7;
-  const size_t bytes = rows ? at + (size_t)layer * copy : block;
+  const size_t bytes = nbs__nbs_block_bytes(need, layer, entry, copy, rows);
   if (bytes > ctx->nbs_block_size) {
     const bool grown = ctx->nbs_block != NULL;
-    const int64_t cap = nbs__nbs_block_cap(need, run->n, grown);
-    size_t want = ((size_t)cap + 1) * entry;
-    if (rows) {
-      want = ((want + 7) & ~(size_t)7) + (size_t)nbs__nbs_block_cap(layer, run->n, grown) * copy;
-    }
+    const size_t want =
+        nbs__nbs_block_bytes(nbs__nbs_block_cap(need, run->n, grown),
+                             nbs__nbs_block_cap(layer, run->n, grown), entry, copy, rows);
     void *p = nbs__alloc(ctx, want);
     if (!p) {
       return nbs__fail(ctx, NBS_ERR_NOMEM, -1,
@@ -853,11 +853,10 @@ static nbs_status nbs__nbs_block_reserve(nbs__run *run, int32_t need, int32_t la
     w += (size_t)need * sizeof(double);
   }
   K->Y = run->dim == 3 ? (int32_t *)(void *)w : NULL;
-  K->rows = rows;
   K->se = NULL;
   K->sr = NULL;
   if (rows) {
-    char *c = (char *)ctx->nbs_block + at;
+    char *c = (char *)ctx->nbs_block + (bytes - (size_t)layer * copy);
     K->se = (nbs__nbs_entry *)(void *)c;
     if (radii) K->sr = (double *)(void *)(c + (size_t)layer * sizeof(nbs__nbs_entry));
   }
@@ -1005,7 +1004,7 @@ nbs__nbs_step(const nbs__run *run, const nbs__nbs_axes *g, const nbs__nbs_block 
   *e = next;
 }
 
-/* Rows together (3D, K->rows): the layer whose entries are the ring's [s, s + len) (mod cap),
+/* Rows together (3D, K->se): the layer whose entries are the ring's [s, s + len) (mod cap),
  * on the y-lists H[R[0..nr-1]] (set 0 or 1, R their rows in the order started), laid out
  * again so that each row's entries follow one another, the rows in R's order, and its
  * y-lists rebuilt through them (each row's list in the order of its entries). The lists
@@ -1037,12 +1036,14 @@ static void nbs__nbs_rows(const nbs__nbs_axes *g, const nbs__nbs_block *K, int32
     pairs++;
   }
   if (4 * apart <= pairs) return;
-  /* the rows' counts; the entries copied, in order */
+  /* the rows' counts; the entries copied, in order, each with its row in its x-link (which
+   * steps 6-7 write before anything reads it) */
   for (int32_t i = 0; i < nr; i++) H[R[i]] = 0;
   for (int32_t j = 0, l = s; j < len; j++) {
     K->se[j] = E[l];
     if (K->r) K->sr[j] = K->r[l];
-    H[nbs__nbs_at(g, E[l].x, 1)]++;
+    K->se[j].X = nbs__nbs_at(g, E[l].x, 1);
+    H[K->se[j].X]++;
     l = l + 1 == cap ? 0 : l + 1;
   }
   /* each row's first place (from s), in R's order */
@@ -1053,8 +1054,7 @@ static void nbs__nbs_rows(const nbs__nbs_axes *g, const nbs__nbs_block *K, int32
   }
   /* the entries to their places: H[iy] ends as the place after row iy's last */
   for (int32_t j = 0; j < len; j++) {
-    const int32_t iy = nbs__nbs_at(g, K->se[j].x, 1);
-    int32_t l = s + H[iy]++;
+    int32_t l = s + H[K->se[j].X]++;
     l = l >= cap ? l - cap : l;
     E[l] = K->se[j];
     if (K->r) K->r[l] = K->sr[j];
@@ -1187,7 +1187,7 @@ nbs__nbs_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bool 
         }
       }
     }
-    if (dim == 3 && K.rows) { /* each layer's rows together (nbs__nbs_rows) */
+    if (dim == 3 && K.se) { /* each layer's rows together (nbs__nbs_rows) */
       nbs__nbs_rows(g, &K, H0, R0, n0, 0, m, cap);
       nbs__nbs_rows(g, &K, H1, R1, n1, mu + 1, cap - 1 - mu, cap);
     }
@@ -1226,7 +1226,7 @@ nbs__nbs_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bool 
         }
       }
       /* (the layer below, the one just done, is in rows already: retaken in order) */
-      if (dim == 3 && K.rows) nbs__nbs_rows(g, &K, H0, R0, n0, s, len, cap);
+      if (dim == 3 && K.se) nbs__nbs_rows(g, &K, H0, R0, n0, s, len, cap);
       NBS__NBS_TRY(nbs__nbs_central(run, L, g, &K, dim, s, len, cap, n0, n1));
     }
   }

@@ -91,11 +91,11 @@ static void test_nbs_formula(void) {
         int64_t block = most + (int64_t)ceil(4.0 * sqrt((double)most));
         if (block > n) block = n;
         int64_t formula = ints * 4 + (block + 1) * entry;
-        /* 3D with each layer's rows together (the block's need past 512 KiB, or
+        /* 3D with each layer's rows together (the block's need past NBS__NBS_ROWS_MIN, or
          * NBS_NBS_ROWS=always): a copy of the fullest layer after the block, on 8 bytes, of
          * 32 bytes per entry (40 with radii) and the same slack */
-        if (dim == 3 && (nbs__nbs_rows_mode() > 0 ||
-                         (nbs__nbs_rows_mode() == 0 && (most + 1) * entry > (512 << 10)))) {
+        const bool big = (size_t)((most + 1) * entry) > NBS__NBS_ROWS_MIN;
+        if (dim == 3 && (nbs__nbs_rows_mode() > 0 || (nbs__nbs_rows_mode() == 0 && big))) {
           int64_t copy = fullest + (int64_t)ceil(4.0 * sqrt((double)fullest));
           if (copy > n) copy = n;
           formula = ints * 4 + (((block + 1) * entry + 7) & ~(int64_t)7) +
