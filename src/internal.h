@@ -452,11 +452,6 @@ nbs_status nbs__nbs(nbs__run *run);
  * (munjiza_nbs.c, "Folded axes"). Fills lists[] (1 past dim) and returns true when an axis
  * is folded. */
 bool nbs__nbs_fold(const nbs__run *run, int64_t lists[3]);
-/* The lists NBS keeps each layer's z-list (2D: each row's y-list) as, for nl layers (rows)
- * and n elements (capacities): a power of two from 1 to 8 in 3D, to 32 in 2D, as many as
- * keep their heads within n / 64. Element k is on list k mod ways of its layer; the walks
- * of steps 3 and 4 go down them side by side. */
-int nbs__nbs_zways(int dim, int64_t nl, int64_t n);
 nbs_status nbs__cellsort(nbs__run *run);
 /* A time step's pass over the input (see cellsort.c), in place of nbs__prepare_scan where
  * the context holds a cell order it can start from and `asked` may run cellsort; returns

@@ -8,10 +8,10 @@
  * with the number of cells) NBS keeps one level of singly connected lists per axis, built and
  * torn down per detection:
  *
- *   2D:  y-lists B[ny] + Y[N]            one list per row of cells (kept as up to 8, below)
+ *   2D:  y-lists B[ny] + Y[N]            one list per row of cells (stored as runs, below)
  *        x-lists A[2][nx] + X[M]         one list per cell of the central row (set 0) and of
  *                                        the row below it (set 1)
- *   3D:  z-lists C[nz] + Z[N]            one list per layer (kept as up to 8, below)
+ *   3D:  z-lists C[nz] + Z[N]            one list per layer (stored as runs, below)
  *        y-lists B[2][ny] + Y[M]         rows of the central layer (set 0), of the layer
  *                                        below it (set 1)
  *        x-lists A[2][nx] + X[M]         cells of the central row (set 0), of its neighbour
@@ -20,9 +20,8 @@
  * A list is found non-empty by looping over the elements of the list one level up, never by
  * looping over cells, and each list is removed by resetting only the heads the elements that
  * built it touched. Time is therefore proportional to N whatever the packing density and the
- * extent of the domain (eqs. 3.63-3.64). Memory is w ny + 2nx + N integers in 2D and
- * w nz + 2ny + 2nx + N in 3D (w <= 8 lists per row or layer, with w ny, w nz <= N / 64),
- * and a block of M <= N entries of 32 bytes in 2D, 36 in 3D (below), where eq. 3.65 has
+ * extent of the domain (eqs. 3.63-3.64). Memory is ny + 2nx + N integers in 2D and
+ * nz + 2ny + 2nx + N in 3D, and a block of M <= N entries of 32 bytes in 2D, 36 in 3D (below), where eq. 3.65 has
  * ny + 2nx + 2N integers and eq. 3.80 nz + 2ny + 2nx + 3N; plus the records described
  * below (ny + 2nx in 2D, nz + 2ny + 2nx in 3D) and a count per row (2D) or layer (3D).
  *
@@ -33,7 +32,8 @@
  *  - a list is marked "old" by storing -2 - head (nbs__mark) instead of adding 2N, which
  *    would overflow int32 for large N; a marked head read as a neighbour goes through
  *    nbs__unmark. Lists of set 1 are never marked. A layer (3D) or row (2D), whose list is
- *    w heads, is marked in its count instead: CN[iz] = -1 once its elements are counted;
+ *    a run (below), is marked in its count instead: CN[iz] = ~CN[iz], which keeps the count
+ *    (step 4 of the layer above still needs it) and is negative;
  *  - records of started heads (RB0, RB1 of at most ny entries, RA0, RA1 of at most nx, RC of at
  *    most nz, or ny in 2D): a push that starts a list (its head was empty) also notes the head's
  *    index. The removal of a set of lists (3D steps 9, 10, 11 and the z-lists; the 2D removal of
@@ -46,21 +46,37 @@
  *    Likewise step 2's loop over the elements runs over RC, the layers in the order step 1 met
  *    their first elements, and so does the pass that sizes the layer block: one pass over the
  *    coordinates (step 1) where there were four;
- *  - walks of independent lists go side by side (2D: the central row and the row below it;
- *    3D: steps 3 and 4, the central row and its four neighbouring rows in steps 6 and 7,
- *    and the four neighbour lists of a central cell). In random element order every step of
+ *  - walks of independent lists go side by side (3D: the central row and its four
+ *    neighbouring rows in steps 6 and 7, and the four neighbour lists of a central cell;
+ *    both: the z-lists' runs, whose coordinates are asked for ahead). In random element order every step of
  *    a list is a cache miss; walked side by side the misses overlap. The rows of steps 6-7
  *    link entries of the block, which at N = 1e7 (3 MB) is larger than the core's cache;
  *    walked one after the other every step waited on the one before; where the block is
  *    larger than 1 MiB, each of those walks also asks for the entry 8 places further down
  *    its list (NBS__NBS_AHEAD);
- *  - a layer's z-list (2D: a row's y-list) is kept as w lists (nbs__nbs_zways: 8 in 3D, 32
- *    in 2D, where their heads stay within N / 64 ints, fewer where there are many layers),
- *    element k on list k mod w, so that steps 3 and 4 walk w lists side by side where the
- *    book's one list would be walked a cache miss at a time. The layer's elements are the
- *    union of its lists; only the order in which the y-lists receive them changes, and with
- *    it the order of the pairs (which this and the chains and gathered candidates below
- *    make differ from the book's plain rendering, the same from run to run);
+ *  - runs (beyond the book, for time). A layer's z-list (2D: a row's y-list) is stored as
+ *    the run of its elements in the order the book's list links them, the last pushed
+ *    first, and its head C[iz] is where the run starts in Z (nbs__nbs_body's step 1: a
+ *    count, then a second pass over the coordinates that puts each element at the end of
+ *    its layer's run still free: a counting sort by layer). The lists hold the same
+ *    elements in the same order, in the same N ints; only their links are implicit: the
+ *    next of the run's j-th element is its (j+1)-th. Why: steps 3-4 walk every layer
+ *    once, and in random element order each step of a linked walk waited on memory twice,
+ *    for the link and then for the element's coordinates, one after the other; 8 lists per
+ *    layer walked side by side (this deviation's predecessor) kept only 8-16 such chains in
+ *    flight, and perf found a quarter of the detection's time (3D, N = 1e7) on the links'
+ *    loads. A run gives the elements ahead of the walk, so their coordinates are asked for
+ *    64 places ahead (nbs__nbs_run) and the walk runs at the pace of the memory, not of its
+ *    latency. Measured (Zen 4, random order, one thread, interleaved, min / median of 5
+ *    processes of three detections (thirty at N = 1e4), ns per element, 8 (3D) or 32 (2D)
+ *    linked lists per layer against runs): 3D N = 1e4 71.6 / 71.9 -> 70.7 / 72.8, 1e6
+ *    107.2 / 119.1 -> 93.6 / 125.5, 1e7 126.2 / 139.3 -> 100.5 / 123.4; 1e6 sparse
+ *    (fraction 0.005) 62.0 -> 47.9, clustered 100.7 -> 88.2, huge 110.8 -> 45.7, cell
+ *    order 78.1 -> 71.9; 2D 1e4 30.6 -> 30.1, 1e6 59.2 -> 50.7, 1e7 58.7 -> 57.2. The second pass over the
+ *    coordinates and its scatter into the runs cost 0.5-3 ns per element of preparation
+ *    (2D 1e7, 4,500 rows: 3.0 -> 6.1). The order of the pairs differs from the linked lists'
+ *    (this and the chains and gathered candidates below make it differ from the book's
+ *    plain rendering, the same from run to run);
  *  - 3D: the layer block. Steps 3 and 4 copy each element they meet (coordinates, radius,
  *    number) into the next entry of a block that holds the central layer and the layer
  *    below it, and the y- and x-lists link entries of the block instead of elements
@@ -224,8 +240,8 @@
  * in 3D, and in 2D
  *   [ B: w(ny+2) ] [ A0: nx+2 ] [ A1: nx+2 ] [ CN: ny+2 ] [ RC: ny+1 ] [ RA0: nx+1 ]
  *   [ RA1: nx+1 ] [ Y: N ]
- * that is 4 (N + (w + 2) nz + 4ny + 4nx + 15 + 2w) bytes in 3D (w = nbs__nbs_zways(3, nz, N)) and
- * 4 (N + (w + 2) ny + 4nx + 9 + 2w) in 2D (w = nbs__nbs_zways(2, ny, N)): eqs. 3.80 and 3.65
+ * that is 4 (N + 3nz + 4ny + 4nx + 17) bytes in 3D and 4 (N + 3ny + 4nx + 11) in 2D: eqs.
+ * 3.80 and 3.65
  * without the links the block holds, the records, the counts and the padding (a record has one
  * spare entry, written and not counted by a push that starts no list). nx, ny, nz, N here are the
  * capacities ctx->work_cap[0], [1], [2], [3]: exactly the lists per axis (the grid's cells, or
@@ -254,12 +270,6 @@
 
 /* ---- the work-block layout ----------------------------------------------------------- */
 
-/* The most lists a layer's z-list (2D: a row's y-list) is kept as (see nbs__nbs_zways):
- * 8 in 3D, 32 in 2D. Beyond 8, the walks' prefetches go into L2 (NBS__NBS_PREFETCH). */
-#define NBS__NBS_ZWAYS 32
-#define NBS__NBS_ZWAYS_3D 8
-#define NBS__NBS_ZWAYS_L1 8
-
 /* The rows' walks of steps 6-7 look ahead (3D). Their lists link entries of the layer block,
  * which at N = 1e7 (fraction 0.5) is 3.3 MB, in the L3, not the core's L2; a row's entries
  * lie anywhere in it (in the order steps 3-4 met them), so every step of a walk missed L2 on
@@ -284,17 +294,10 @@ int8_t nbs__nbs_rows_mode(void) {
   return 0;
 }
 
-int nbs__nbs_zways(int dim, int64_t nl, int64_t n) {
-  int w = dim == 2 ? NBS__NBS_ZWAYS : NBS__NBS_ZWAYS_3D;
-  while (w > 1 && (int64_t)w * (nl + 2) > n / 64) w /= 2;
-  return w;
-}
-
 typedef struct nbs__nbs_layout {
   size_t bytes;       /* heads and next arrays */
-  int32_t *C;         /* z-list heads (3D only): zways per layer */
-  int32_t zways;      /* the lists a layer's z-list (a row's y-list in 2D) is kept as */
-  int32_t *B0;        /* y-list heads; in 2D the only set, zways per row */
+  int32_t *C;         /* z-list heads (3D only): where each layer's run starts in Z */
+  int32_t *B0;        /* y-list heads; in 2D the only set, where each row's run starts in Y */
   int32_t *B1;        /* y-list heads of the layer below the central one (3D only) */
   int32_t *A0;        /* x-list heads of the central row */
   int32_t *A1;        /* x-list heads of the neighbouring rows */
@@ -310,8 +313,7 @@ typedef struct nbs__nbs_layout {
 static int64_t nbs__nbs_head_count(int dim, const int64_t cap[4]) {
   int64_t h = 2 * (cap[0] + 2); /* A[2][nx] */
   if (dim == 3) h += 2 * (cap[1] + 2); /* B[2][ny] */
-  /* C[nz][w] in 3D, B[ny][w] in 2D: the lists of the elements */
-  h += nbs__nbs_zways(dim, cap[dim - 1], cap[3]) * (cap[dim - 1] + 2);
+  h += cap[dim - 1] + 2; /* C[nz] in 3D, B[ny] in 2D: the lists of the elements */
   return h;
 }
 
@@ -346,10 +348,9 @@ static void nbs__nbs_layout_at(nbs__nbs_layout *L, void *work, int dim, const in
   int32_t *w = work;
   const int64_t nl = cap[dim - 1]; /* the lists of the elements: layers (3D), rows (2D) */
   L->bytes = (size_t)nbs__nbs_layout_bytes(dim, cap);
-  L->zways = nbs__nbs_zways(dim, nl, cap[3]);
   if (dim == 3) {
     L->C = w;
-    w += L->zways * (nl + 2);
+    w += nl + 2;
     L->B0 = w;
     w += cap[1] + 2;
     L->B1 = w;
@@ -357,7 +358,7 @@ static void nbs__nbs_layout_at(nbs__nbs_layout *L, void *work, int dim, const in
   } else {
     L->C = NULL;
     L->B0 = w;
-    w += L->zways * (nl + 2);
+    w += nl + 2;
     L->B1 = NULL;
   }
   L->A0 = w;
@@ -750,29 +751,6 @@ static inline nbs_status nbs__nbs_check_at(nbs__run *run, const nbs__nbs_axes *g
     NBS__NBS_PUSH((l), K->e[l].X, A, nbs__ix, R, top);                                        \
   } while (0)
 
-/* Asks for the link (in `links`) and the coordinates (dim in x) of element k, the next of a
- * walk of the elements' lists, while the walk takes the one before it: the walks of steps
- * 3-4 miss the cache at every element in random order, and the processor alone overlaps
- * few of them (k may be NBS__EMPTY: a prefetch never faults). Into L1, or, where more than
- * NBS__NBS_ZWAYS_L1 walks go side by side (2D, N of millions: up to 64 walks, two asks
- * each), into L2 (locality 1): a prefetch into L1 holds one of the core's few L1 miss
- * buffers until memory answers, and those, not the walks, then bound the misses in flight.
- * Measured (2D, interleaved, min of 3, ns per element): N = 1e7 67.1 -> 57.2 with 32 lists
- * and L2 (65.7 with 32 lists into L1, 59.5 with 16 into L2, 68.4 with 8 into L2); 4e6 64.8
- * -> 57.7. With 8 lists or fewer, L2 only cost (2D N = 1e4, 1 list: 30.2 -> 31.4; 3D 1e6,
- * 8: 101.5 -> 104.5); 3D with 32 lists into L2 gained nothing (1e7 127.1 -> 125.5, 1e6
- * 101.5 -> 103.7: its walks are not the larger part of a layer's work). */
-#define NBS__NBS_PREFETCH(links, x, dim, k, l2)                                               \
-  do {                                                                                        \
-    if (l2) {                                                                                 \
-      __builtin_prefetch((links) + (k), 0, 1);                                                \
-      __builtin_prefetch((x) + (ptrdiff_t)(k) * (dim), 0, 1);                                 \
-    } else {                                                                                  \
-      __builtin_prefetch((links) + (k));                                                      \
-      __builtin_prefetch((x) + (ptrdiff_t)(k) * (dim));                                       \
-    }                                                                                         \
-  } while (0)
-
 /* Empties the heads H[R[0..top-1]] that a set's lists were started at. */
 static inline void nbs__nbs_clear(int32_t *H, const int32_t *R, int32_t top) {
   for (int32_t i = 0; i < top; i++) H[R[i]] = NBS__EMPTY;
@@ -991,17 +969,41 @@ nbs__nbs_take(const nbs__run *run, const nbs__nbs_axes *g, const nbs__nbs_block 
   nbs__nbs_retake(g, K, dim, l, H, R, top);
 }
 
-/* One step of a walk of an elements' list (linked by Z), at element *e: asks for the next
- * one (NBS__NBS_PREFETCH, into L2 where l2), takes *e into entry l (nbs__nbs_take) and
- * moves *e on. */
+/* Steps 3-4 for a layer (2D: a row) whose z-list is the run ids[0..len) of Z: each element
+ * taken (nbs__nbs_take) into entries l0, l0 + step, ... of the ring of cap entries (step 1,
+ * or -1 from the block's end for the layer below). The run gives the elements ahead of the
+ * walk, so each one's coordinates (both ends: in 3D a quarter of them straddle two lines)
+ * and radius are asked for NBS__NBS_FAR places ahead into L2 (locality 1: no L1 miss
+ * buffer held while memory answers) and NBS__NBS_NEAR ahead into L1, as cellsort's gather
+ * does (nbs__cs_prefetch). Distances of 32/8, 128/32 and 256/16 measured the same
+ * (3D, N = 1e7, interleaved, min of 3: 113.0, 116.6, 115.5, 107.9 ns per element, noise). */
+#define NBS__NBS_FAR 64
+#define NBS__NBS_NEAR 16
 static inline __attribute__((always_inline)) void
-nbs__nbs_step(const nbs__run *run, const nbs__nbs_axes *g, const nbs__nbs_block *K, int dim,
-              bool l2, const int32_t *Z, int32_t *e, int32_t l, int32_t *H, int32_t *R,
-              int32_t *top) {
-  const int32_t next = Z[*e];
-  NBS__NBS_PREFETCH(Z, run->x, dim, next, l2);
-  nbs__nbs_take(run, g, K, dim, *e, l, H, R, top);
-  *e = next;
+nbs__nbs_run(const nbs__run *run, const nbs__nbs_axes *g, const nbs__nbs_block *K, int dim,
+             const int32_t *ids, int32_t len, int32_t l0, int32_t cap, int32_t *H, int32_t *R,
+             int32_t *top, int step) {
+  const double *x = run->x, *r = run->r;
+  int32_t l = l0;
+  for (int32_t j = 0; j < len; j++) {
+    if (j + NBS__NBS_FAR < len) {
+      const int32_t k = ids[j + NBS__NBS_FAR];
+      const double *p = x + (size_t)k * (size_t)dim;
+      __builtin_prefetch(p, 0, 1);
+      __builtin_prefetch(p + dim - 1, 0, 1);
+      if (r) __builtin_prefetch(r + k, 0, 1);
+    }
+    if (j + NBS__NBS_NEAR < len) {
+      const int32_t k = ids[j + NBS__NBS_NEAR];
+      const double *p = x + (size_t)k * (size_t)dim;
+      __builtin_prefetch(p);
+      __builtin_prefetch(p + dim - 1);
+      if (r) __builtin_prefetch(r + k);
+    }
+    nbs__nbs_take(run, g, K, dim, ids[j], l, H, R, top);
+    l += step;
+    l = l == cap ? 0 : l;
+  }
 }
 
 /* Rows together (3D, K->se): the layer whose entries are the ring's [s, s + len) (mod cap),
@@ -1105,9 +1107,10 @@ nbs__nbs_central(nbs__run *run, const nbs__nbs_layout *L, const nbs__nbs_axes *g
  * 2D: section 3.8 one level shorter). The lists of the elements are the z-lists of the
  * layers in 3D (C, Z) and the y-lists of the rows in 2D (B, Y); the level below them is the
  * y-lists of a layer in 3D (B0, B1, records RB0, RB1) and the x-lists of a row in 2D (A0,
- * A1, records RA0, RA1). Each of the elements' lists is kept as w lists (see the file
- * comment), the central one and the one below it are copied into the block as they are
- * walked, and the central ones chain upwards. dim is a constant in each compiled copy. */
+ * A1, records RA0, RA1). Each of the elements' lists is stored as a run of Z, its elements
+ * in the order the book's list links them (see the file comment); the central one and the
+ * one below it are copied into the block as they are walked, and the central ones chain
+ * upwards. dim is a constant in each compiled copy. */
 static inline __attribute__((always_inline)) nbs_status
 nbs__nbs_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bool fold, int dim) {
   axes.fold = fold;
@@ -1117,24 +1120,31 @@ nbs__nbs_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bool 
   const int32_t n = run->n;
   int32_t *restrict C = dim == 3 ? L->C : L->B0;
   int32_t *restrict Z = dim == 3 ? L->Z : L->Y;
-  const int32_t ways = L->zways;
-  const bool l2 = ways > NBS__NBS_ZWAYS_L1; /* the walks' prefetches into L2 */
   int32_t *restrict CN = L->CN;
   int32_t *restrict RC = L->RC;
   int32_t *H0 = dim == 3 ? L->B0 : L->A0, *H1 = dim == 3 ? L->B1 : L->A1;
   int32_t *R0 = dim == 3 ? L->RB0 : L->RA0, *R1 = dim == 3 ? L->RB1 : L->RA1;
 
-  /* Step 1: map every element onto its z-list (layer; in 2D its y-list, row): Z[k] = C[iz];
-   * C[iz] = k, the layer's list k mod w of its w. All layers are "new" (CN[iz] >= 0):
-   * CN[iz] counts the layer's elements, and RC notes each layer at its first element. */
+  /* Step 1: map every element onto its z-list (layer; in 2D its y-list, row), each list a
+   * run of Z (see "Runs" in the file comment): a pass counts each layer's elements (CN[iz])
+   * and notes each layer in RC at its first element; the runs follow one another in RC's
+   * order; a second pass puts each element k, in increasing k, at the end of its layer's
+   * run still free (C[iz], which ends as the run's first place), so that a run holds its
+   * elements in the order of the book's list (Z[k] = C[iz]; C[iz] = k), the last pushed
+   * first. All layers are "new" (CN[iz] >= 0). */
   int32_t nc = 0; /* RC[0..nc-1]: the layers, in the order of their first elements */
   for (int32_t k = 0; k < n; k++) {
     const int32_t iz = nbs__nbs_cell(g, x, dim, k, a);
-    int32_t *h = &C[ways * iz + (k & (ways - 1))];
-    Z[k] = *h;
-    *h = k;
     RC[nc] = iz;
     nc += CN[iz]++ == 0;
+  }
+  for (int32_t i = 0, at = 0; i < nc; i++) {
+    at += CN[RC[i]];
+    C[RC[i]] = at;
+  }
+  for (int32_t k = 0; k < n; k++) {
+    const int32_t iz = nbs__nbs_cell(g, x, dim, k, a);
+    Z[--C[iz]] = k;
   }
 
   /* The block: as many entries as the largest layer and the one below it hold. */
@@ -1159,37 +1169,22 @@ nbs__nbs_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bool 
   for (int32_t i = 0; i < nc; i++) {
     int32_t iz = RC[i];
     if (CN[iz] < 0) continue;
-    CN[iz] = -1; /* mark the layer "old" */
+    const int32_t m = CN[iz];
+    CN[iz] = ~m; /* mark the layer "old" (its count kept, complemented) */
     const int32_t iu = nbs__nbs_near(g, iz, -1, a);
-    int32_t e[NBS__NBS_ZWAYS], u[NBS__NBS_ZWAYS];
-    for (int w = 0; w < ways; w++) {
-      e[w] = C[ways * iz + w];
-      u[w] = C[ways * iu + w];
-    }
+    const int32_t mu = CN[iu] >= 0 ? CN[iu] : ~CN[iu]; /* (an empty one: 0) */
 
     /* Step 3: the elements of the central layer onto the lists of set 0; step 4: the
      * elements of the neighbouring layer iz-1 onto the lists of set 1; each copied into the
      * block on the way, the central layer's from entry 0 up, the other's from the last entry
-     * down. The walks go side by side, so that their cache misses overlap. R0 records the
-     * lists of the central layer in the order in which this walk meets their first
-     * element. */
-    int32_t m = 0, mu = cap - 1, n0 = 0, n1 = 0;
-    for (bool more = true; more;) {
-      more = false;
-      for (int w = 0; w < ways; w++) {
-        if (e[w] != NBS__EMPTY) {
-          nbs__nbs_step(run, g, &K, dim, l2, Z, &e[w], m++, H0, R0, &n0);
-          more = true;
-        }
-        if (u[w] != NBS__EMPTY) {
-          nbs__nbs_step(run, g, &K, dim, l2, Z, &u[w], mu--, H1, R1, &n1);
-          more = true;
-        }
-      }
-    }
+     * down. R0 records the lists of the central layer in the order in which this walk meets
+     * their first element. */
+    int32_t n0 = 0, n1 = 0;
+    nbs__nbs_run(run, g, &K, dim, Z + C[iz], m, 0, cap, H0, R0, &n0, 1);
+    if (mu > 0) nbs__nbs_run(run, g, &K, dim, Z + C[iu], mu, cap - 1, cap, H1, R1, &n1, -1);
     if (dim == 3 && K.se) { /* each layer's rows together (nbs__nbs_rows) */
       nbs__nbs_rows(g, &K, H0, R0, n0, 0, m, cap);
-      nbs__nbs_rows(g, &K, H1, R1, n1, mu + 1, cap - 1 - mu, cap);
+      nbs__nbs_rows(g, &K, H1, R1, n1, cap - mu, mu, cap);
     }
     /* Steps 5-11 over the block. */
     NBS__NBS_TRY(nbs__nbs_central(run, L, g, &K, dim, 0, m, cap, n0, n1));
@@ -1200,7 +1195,7 @@ nbs__nbs_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bool 
       const int32_t iv = nbs__nbs_near(g, iz, 1, a);
       if (CN[iv] <= 0) break; /* empty or old: the chain ends */
       iz = iv;
-      CN[iz] = -1; /* mark the layer "old" */
+      CN[iz] = ~CN[iz]; /* mark the layer "old" */
       n0 = n1 = 0;
       /* Step 4 for the layer just done, now the neighbouring one: its entries onto the
        * lists of set 1, in the order they were taken. */
@@ -1211,20 +1206,8 @@ nbs__nbs_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bool 
       /* Step 3: the new central layer's elements into the ring after them. */
       s = s + len;
       s = s >= cap ? s - cap : s;
-      m = s;
-      len = 0;
-      for (int w = 0; w < ways; w++) e[w] = C[ways * iz + w];
-      for (bool more = true; more;) {
-        more = false;
-        for (int w = 0; w < ways; w++) {
-          if (e[w] != NBS__EMPTY) {
-            nbs__nbs_step(run, g, &K, dim, l2, Z, &e[w], m, H0, R0, &n0);
-            m = m + 1 == cap ? 0 : m + 1;
-            len++;
-            more = true;
-          }
-        }
-      }
+      len = ~CN[iz];
+      nbs__nbs_run(run, g, &K, dim, Z + C[iz], len, s, cap, H0, R0, &n0, 1);
       /* (the layer below, the one just done, is in rows already: retaken in order) */
       if (dim == 3 && K.se) nbs__nbs_rows(g, &K, H0, R0, n0, s, len, cap);
       NBS__NBS_TRY(nbs__nbs_central(run, L, g, &K, dim, s, len, cap, n0, n1));
@@ -1235,7 +1218,7 @@ nbs__nbs_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bool 
    * noted. */
   for (int32_t i = 0; i < nc; i++) {
     const int32_t iz = RC[i];
-    for (int w = 0; w < ways; w++) C[ways * iz + w] = NBS__EMPTY;
+    C[iz] = NBS__EMPTY;
     CN[iz] = 0;
   }
   return NBS_OK;

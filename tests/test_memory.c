@@ -52,8 +52,8 @@ static int64_t nbs_block_entries(nbs_context *ctx, const nbs_input *in, int64_t 
 }
 
 /* NBS: 2D ny + 2nx + N integers (eq. 3.65 without the x-links, which are in the block); 3D
- * nz + 2ny + 2nx + N integers (eq. 3.80 without the y- and x-links, in the block); with up
- * to 32 lists per row (2D) or 8 per layer (3D) instead of one (nbs__nbs_zways), plus their counts
+ * nz + 2ny + 2nx + N integers (eq. 3.80 without the y- and x-links, in the block), plus the
+ * counts of the rows (2D) or layers (3D)
  * and the records of the heads each set of lists started (ny + 2nx in 2D, nz + 2ny + 2nx in
  * 3D), plus the block of 32 bytes per entry in 2D, 36 in 3D, and its sentinel entry (see
  * src/munjiza_nbs.c). The padding cells on each side of
@@ -79,9 +79,7 @@ static void test_nbs_formula(void) {
         const int64_t nl[3] = {st.cells[at[0]], st.cells[at[1]], dim == 3 ? st.cells[at[2]] : 1};
         CHECK_MSG(kinds[f] != SCENE_SLAB || at[dim - 1] != dim - 1,
                   "%dD slab n=%lld: NBS's layers (rows) along the thin axis", dim, (long long)n);
-        const int64_t ways = nbs__nbs_zways(dim, nl[dim - 1], n);
-        int64_t ints = dim == 2 ? (ways + 2) * nl[1] + 4 * nl[0] + n
-                                : (ways + 2) * nl[2] + 4 * nl[1] + 4 * nl[0] + n;
+        int64_t ints = dim == 2 ? 3 * nl[1] + 4 * nl[0] + n : 3 * nl[2] + 4 * nl[1] + 4 * nl[0] + n;
         /* a block entry: 32 bytes, 8 more with radii, 4 more in 3D (the y-link) */
         const int64_t entry = 32 + (in.radii ? 8 : 0) + (dim == 3 ? 4 : 0);
         /* the block: the two fullest neighbouring layers M and a first detection's slack of
@@ -112,10 +110,9 @@ static void test_nbs_formula(void) {
          * thinner fractions, a 2D slab's long axis; never a crowded uniform scene (f = 0) */
         const nbs__run run = prepared_run(ctx, &in);
         const int64_t *cells = run.grid.n;
-        const int64_t zw = nbs__nbs_zways(dim, cells[dim - 1], n);
-        const int64_t book = dim == 2 ? (zw + 2) * cells[1] + 4 * cells[0]
-                                      : (zw + 2) * cells[2] + 4 * cells[1] + 4 * cells[0];
-        const int64_t pad = dim == 2 ? 9 + 2 * zw : 15 + 2 * zw;
+        const int64_t book = dim == 2 ? 3 * cells[1] + 4 * cells[0]
+                                      : 3 * cells[2] + 4 * cells[1] + 4 * cells[0];
+        const int64_t pad = dim == 2 ? 11 : 17;
         CHECK_MSG(st.compressed == (f == 3 || f == 4 || (f > 0 && 2 * (book + pad) > n)),
                   "%dD %s n=%lld fraction %g: folded %d", dim, scene_kind_name(kinds[f]),
                   (long long)n, fractions[f], st.compressed);

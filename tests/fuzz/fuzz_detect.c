@@ -437,8 +437,8 @@ static nbs_status fz_expected(const fz_run *R, nbs_algorithm algo) {
     if (!g->fits) return NBS_ERR_EXTENT;
     int64_t l[3];
     fz_nbs_lists(R, l);
-    /* heads (A: 2 (nx+2); 3D B: 2 (ny+2); and w per list of the elements, B: w (ny+2) in
-     * 2D, C: w (nz+2) in 3D, w = nbs__nbs_zways), the counts of the lists of the elements
+    /* heads (A: 2 (nx+2); 3D B: 2 (ny+2); and one per list of the elements, B: ny+2 in 2D,
+     * C: nz+2 in 3D), the counts of the lists of the elements
      * (ny+2 or nz+2) and the records of started lists (2 (nx+1), those of the elements'
      * lists, ny+1 or nz+1, and 2 (ny+1) in 3D), all int32, with nx, ny, nz the lists per
      * axis */
@@ -455,8 +455,7 @@ static nbs_status fz_expected(const fz_run *R, nbs_algorithm algo) {
     }
     m[d - 1] = l[top];
     const int64_t nl = m[d - 1];
-    const int64_t w = nbs__nbs_zways(d, nl, s->n);
-    int64_t heads = 2 * (m[0] + 2) + (d == 3 ? 2 * (m[1] + 2) : 0) + w * (nl + 2);
+    int64_t heads = 2 * (m[0] + 2) + (d == 3 ? 2 * (m[1] + 2) : 0) + nl + 2;
     int64_t counts = nl + 2;
     int64_t records = 2 * (m[0] + 1) + nl + 1 + (d == 3 ? 2 * (m[1] + 1) : 0);
     return (uint64_t)(heads + counts + records) * 4u > s->cell_budget ? NBS_ERR_BUDGET
