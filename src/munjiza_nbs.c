@@ -21,9 +21,10 @@
  * looping over cells, and each list is removed by resetting only the heads the elements that
  * built it touched. Time is therefore proportional to N whatever the packing density and the
  * extent of the domain (eqs. 3.63-3.64). Memory is ny + 2nx + N integers in 2D and
- * nz + 2ny + 2nx + N in 3D, and a block of M <= N entries of 32 bytes in 2D, 36 in 3D (below), where eq. 3.65 has
- * ny + 2nx + 2N integers and eq. 3.80 nz + 2ny + 2nx + 3N; plus the records described
- * below (ny + 2nx in 2D, nz + 2ny + 2nx in 3D) and a count per row (2D) or layer (3D).
+ * nz + 2ny + 2nx + N in 3D, and a block of M <= N entries of 32 bytes in 2D, 36 in 3D
+ * (below), where eq. 3.65 has ny + 2nx + 2N integers and eq. 3.80 nz + 2ny + 2nx + 3N; plus
+ * the records described below (ny + 2nx in 2D, nz + 2ny + 2nx in 3D) and a count per row
+ * (2D) or layer (3D).
  *
  * Deviations from the book's text, all of them representation only:
  *  - 0-based element indices, and the end of a list is NBS__EMPTY (-1);
@@ -44,16 +45,15 @@
  *    same first element, so the central rows come in the book's order without a second walk of the
  *    layer (the rows are still found by the loop over the elements of the layer, step 3's).
  *    Likewise step 2's loop over the elements runs over RC, the layers in the order step 1 met
- *    their first elements, and so does the pass that sizes the layer block: one pass over the
- *    coordinates (step 1) where there were four;
+ *    their first elements, and so does the pass that sizes the layer block: two passes over
+ *    the coordinates (step 1, the second for the runs below) where there were four;
  *  - walks of independent lists go side by side (3D: the central row and its four
- *    neighbouring rows in steps 6 and 7, and the four neighbour lists of a central cell;
- *    both: the z-lists' runs, whose coordinates are asked for ahead). In random element order every step of
- *    a list is a cache miss; walked side by side the misses overlap. The rows of steps 6-7
- *    link entries of the block, which at N = 1e7 (3 MB) is larger than the core's cache;
- *    walked one after the other every step waited on the one before; where the block is
- *    larger than 1 MiB, each of those walks also asks for the entry 8 places further down
- *    its list (NBS__NBS_AHEAD);
+ *    neighbouring rows in steps 6 and 7, and the four neighbour lists of a central cell). In
+ *    random element order every step of a list is a cache miss; walked side by side the
+ *    misses overlap. The rows of steps 6-7 link entries of the block, which at N = 1e7 (3 MB)
+ *    is larger than the core's cache; walked one after the other every step waited on the
+ *    one before; where the block is larger than 1 MiB, each of those walks also asks for
+ *    the entry 8 places further down its list (NBS__NBS_AHEAD);
  *  - runs (beyond the book, for time). A layer's z-list (2D: a row's y-list) is stored as
  *    the run of its elements in the order the book's list links them, the last pushed
  *    first, and its head C[iz] is where the run starts in Z (nbs__nbs_body's step 1: a
@@ -72,11 +72,11 @@
  *    linked lists per layer against runs): 3D N = 1e4 71.6 / 71.9 -> 70.7 / 72.8, 1e6
  *    107.2 / 119.1 -> 93.6 / 125.5, 1e7 126.2 / 139.3 -> 100.5 / 123.4; 1e6 sparse
  *    (fraction 0.005) 62.0 -> 47.9, clustered 100.7 -> 88.2, huge 110.8 -> 45.7, cell
- *    order 78.1 -> 71.9; 2D 1e4 30.6 -> 30.1, 1e6 59.2 -> 50.7, 1e7 58.7 -> 57.2. The second pass over the
- *    coordinates and its scatter into the runs cost 0.5-3 ns per element of preparation
- *    (2D 1e7, 4,500 rows: 3.0 -> 6.1). The order of the pairs differs from the linked lists'
- *    (this and the chains and gathered candidates below make it differ from the book's
- *    plain rendering, the same from run to run);
+ *    order 78.1 -> 71.9; 2D 1e4 30.6 -> 30.1, 1e6 59.2 -> 50.7, 1e7 58.7 -> 57.2. The
+ *    second pass over the coordinates and its scatter into the runs cost 0.5-3 ns per
+ *    element of preparation (2D 1e7, 4,500 rows: 3.0 -> 6.1). The order of the pairs differs
+ *    from the linked lists' (this and the chains and gathered candidates below make it
+ *    differ from the book's plain rendering, the same from run to run);
  *  - 3D: the layer block. Steps 3 and 4 copy each element they meet (coordinates, radius,
  *    number) into the next entry of a block that holds the central layer and the layer
  *    below it, and the y- and x-lists link entries of the block instead of elements
