@@ -100,7 +100,7 @@
  *    after a central row, the row above it, if new and not empty, so that the rows two
  *    central rows share are still in the core's cache (at N = 1e7 a layer block is 3 MB);
  *  - 2D, the same representation one level down (one body, nbs__nbs_body, runs both): the y-lists
- *    are kept as w lists per row and counted (CN[ny], RC), the central row and the row below it are
+ *    are runs (above) and counted (CN[ny], RC), the central row and the row below it are
  *    copied into a block (entries without a y-link) as they are walked, straight onto the x-lists
  *    of sets 0 and 1 (whose links are the entries'; no X[N]), the central row is the ring's range
  *    it was copied to, and rows chain upwards as layers do. Memory: ny + 2nx + N ints and the
@@ -235,10 +235,10 @@
  * AVX-512 test is.
  *
  * The work block (ctx->work, work_kind NBS__WORK_NBS) holds, as int32:
- *   [ C: w(nz+2) ] [ B0: ny+2 ] [ B1: ny+2 ] [ A0: nx+2 ] [ A1: nx+2 ] [ CN: nz+2 ]
+ *   [ C: nz+2 ] [ B0: ny+2 ] [ B1: ny+2 ] [ A0: nx+2 ] [ A1: nx+2 ] [ CN: nz+2 ]
  *   [ RC: nz+1 ] [ RB0: ny+1 ] [ RB1: ny+1 ] [ RA0: nx+1 ] [ RA1: nx+1 ] [ Z: N ]
  * in 3D, and in 2D
- *   [ B: w(ny+2) ] [ A0: nx+2 ] [ A1: nx+2 ] [ CN: ny+2 ] [ RC: ny+1 ] [ RA0: nx+1 ]
+ *   [ B: ny+2 ] [ A0: nx+2 ] [ A1: nx+2 ] [ CN: ny+2 ] [ RC: ny+1 ] [ RA0: nx+1 ]
  *   [ RA1: nx+1 ] [ Y: N ]
  * that is 4 (N + 3nz + 4ny + 4nx + 17) bytes in 3D and 4 (N + 3ny + 4nx + 11) in 2D: eqs.
  * 3.80 and 3.65
@@ -295,14 +295,14 @@ int8_t nbs__nbs_rows_mode(void) {
 }
 
 typedef struct nbs__nbs_layout {
-  size_t bytes;       /* heads and next arrays */
+  size_t bytes;       /* heads, counts, records and the runs */
   int32_t *C;         /* z-list heads (3D only): where each layer's run starts in Z */
   int32_t *B0;        /* y-list heads; in 2D the only set, where each row's run starts in Y */
   int32_t *B1;        /* y-list heads of the layer below the central one (3D only) */
   int32_t *A0;        /* x-list heads of the central row */
   int32_t *A1;        /* x-list heads of the neighbouring rows */
   int32_t *CN;        /* number of elements of each z-list (2D: y-list; see the block) */
-  int32_t *Z, *Y;     /* next arrays of the elements: Z in 3D, Y in 2D */
+  int32_t *Z, *Y;     /* the runs of the elements' lists (N ints): Z in 3D, Y in 2D */
   /* The heads each set's lists were started at, in the order they were started: at most
    * ny (RB0, RB1; 3D only) and nx (RA0, RA1) entries; RC, the layers (2D: rows) in the
    * order step 1 met their first element, at most nz (ny). */
@@ -336,8 +336,9 @@ static uint64_t nbs__nbs_axis_bytes(int dim, const int64_t cap[4]) {
          sizeof(int32_t);
 }
 
-/* Bytes of the whole layout: heads, counts, records of started heads and the next array of
- * N int32 of the lists of the elements (Z in 3D, Y in 2D; the others are in the block). */
+/* Bytes of the whole layout: heads, counts, records of started heads and the runs of the
+ * lists of the elements, N int32 (Z in 3D, Y in 2D; the other lists' links are in the
+ * block). */
 static uint64_t nbs__nbs_layout_bytes(int dim, const int64_t cap[4]) {
   uint64_t ints = nbs__nbs_axis_bytes(dim, cap) / sizeof(int32_t) + (uint64_t)cap[3];
   return ints * sizeof(int32_t);
@@ -1126,7 +1127,7 @@ nbs__nbs_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bool 
   int32_t *R0 = dim == 3 ? L->RB0 : L->RA0, *R1 = dim == 3 ? L->RB1 : L->RA1;
 
   /* Step 1: map every element onto its z-list (layer; in 2D its y-list, row), each list a
-   * run of Z (see "Runs" in the file comment): a pass counts each layer's elements (CN[iz])
+   * run of Z (see "runs" in the file comment): a pass counts each layer's elements (CN[iz])
    * and notes each layer in RC at its first element; the runs follow one another in RC's
    * order; a second pass puts each element k, in increasing k, at the end of its layer's
    * run still free (C[iz], which ends as the run's first place), so that a run holds its

@@ -104,8 +104,8 @@ static void test_nbs_formula(void) {
                   "%dD %s n=%lld fraction %g: NBS holds %zu work bytes, the formula %lld",
                   dim, scene_kind_name(kinds[f]), (long long)n, fractions[f], st.work_bytes,
                   (long long)formula);
-        /* NBS folds where the book's heads and records (with their padding: 9 ints in 2D,
-         * 15 in 3D, and two per list of a row or layer) would take more ints than half the
+        /* NBS folds where the book's heads, counts and records (with their padding: 11 ints
+         * in 2D, 17 in 3D) would take more ints than half the
          * elements: the far elements of sparse and clustered scenes, uniform scenes at the
          * thinner fractions, a 2D slab's long axis; never a crowded uniform scene (f = 0) */
         const nbs__run run = prepared_run(ctx, &in);
