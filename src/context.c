@@ -293,6 +293,7 @@ nbs_status nbs_context_create(const nbs_context_def *def, nbs_context **out) {
   ctx->cs_part_min = nbs__cellsort_partition_min();
   ctx->cs_part_wide = nbs__cellsort_partition_wide();
   ctx->nbs_rows = nbs__nbs_rows_mode();
+  ctx->nbs_order_mode = nbs__nbs_order_mode();
   ctx->cs_tune = nbs__cellsort_tune();
   ctx->cs_ways.cls = ctx->cs_steps.cls = -1;
   ctx->cs_steal_first = nbs__cellsort_steal_first();
@@ -307,6 +308,7 @@ void nbs_context_destroy(nbs_context *ctx) {
   if (!ctx) return;
   nbs__free(ctx, ctx->work, ctx->work_size);
   nbs__free(ctx, ctx->nbs_block, ctx->nbs_block_size);
+  nbs__free(ctx, ctx->nbs_order, ctx->nbs_order_size);
   nbs__free(ctx, ctx->pairs, ctx->pairs_cap * sizeof(nbs_pair));
   for (int t = 0; t < NBS__THREADS_MAX; t++) {
     nbs__free(ctx, ctx->tpairs[t], ctx->tcap[t] * sizeof(nbs_pair));

@@ -133,6 +133,14 @@ struct nbs_context {
    * size (0), always (1) or never (-1), from NBS_NBS_ROWS when the context was created
    * (nbs__nbs_rows_mode; munjiza_nbs.c, "Rows together"). */
   int8_t nbs_rows;
+  /* NBS's elements in layer order (3D): each element's coordinates (and radius) copied by
+   * step 1 to its place in its layer's run, n * (3 or 4) doubles, in their own allocation;
+   * nothing in it lives from one detection to the next (munjiza_nbs.c, "The elements in
+   * layer order"). Where the input is larger than NBS__NBS_ORDER_MIN (0), always (1) or never
+   * (-1), from NBS_NBS_ORDER when the context was created (nbs__nbs_order_mode). */
+  void *nbs_order;
+  size_t nbs_order_size;
+  int8_t nbs_order_mode;
   /* cellsort's cell order: when work_kind is NBS__WORK_CELLSORT and cs_order_n is n (> 0),
    * the work block's key array holds the packed words (key << eb | element) of the last
    * detection of n elements, sorted: the next detection may start from it (cellsort.c),
@@ -493,6 +501,16 @@ bool nbs__cellsort_partition_wide(void);
  * 79.5 ns per element; 1e5, 170 kB, even). */
 #define NBS__NBS_ROWS_MIN ((size_t)512 << 10)
 int8_t nbs__nbs_rows_mode(void);
+/* NBS (3D) copies every element's coordinates (and radius) into its layer's place in step 1
+ * where the input's coordinates and radii are larger than this (munjiza_nbs.c, "The elements
+ * in layer order"): about the last-level cache of the machines measured, below which the
+ * walks' random reads of the input are answered from it and the copy only costs (N = 1e6,
+ * 24 MB: 88.3 -> 89.1 ns per element; 3e6, 72 MB, 95.1 -> 90.9; 1e7 -17%). */
+#define NBS__NBS_ORDER_MIN ((size_t)32 << 20)
+int8_t nbs__nbs_order_mode(void);
+/* Whether NBS's detection of n elements in dimension dim (with radii or not) puts them in
+ * layer order, on context ctx. */
+bool nbs__nbs_ordered(const nbs_context *ctx, int dim, int64_t n, bool radii);
 bool nbs__cellsort_tune(void);
 /* After a detection that succeeded: where it was one of cellsort's timed tries (run->cs_try),
  * its time from its start to its search, `seconds`, is recorded (nbs_context.cs_tune). */

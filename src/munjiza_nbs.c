@@ -24,7 +24,8 @@
  * nz + 2ny + 2nx + N in 3D, and a block of M <= N entries of 32 bytes in 2D, 36 in 3D
  * (below), where eq. 3.65 has ny + 2nx + 2N integers and eq. 3.80 nz + 2ny + 2nx + 3N; plus
  * the records described below (ny + 2nx in 2D, nz + 2ny + 2nx in 3D) and a count per row
- * (2D) or layer (3D).
+ * (2D) or layer (3D); in 3D, where the input is over 32 MiB, 3N doubles more (4N with
+ * radii: the elements in layer order, below).
  *
  * Deviations from the book's text, all of them representation only:
  *  - 0-based element indices, and the end of a list is NBS__EMPTY (-1);
@@ -77,6 +78,24 @@
  *    element of preparation (2D 1e7, 4,500 rows: 3.0 -> 6.1). The order of the pairs differs
  *    from the linked lists' (this and the chains and gathered candidates below make it
  *    differ from the book's plain rendering, the same from run to run);
+ *  - the elements in layer order (beyond the book, for time; 3D, where the input's
+ *    coordinates and radii are over NBS__NBS_ORDER_MIN, 32 MiB: N > 1.4e6 without radii).
+ *    Step 1's second pass, as it puts element k at its place p in its layer's run, copies
+ *    its coordinates (and radius) to XS[p] too (ctx->nbs_order, 24 bytes per element, 32
+ *    with radii), and steps 3-4 read a run's coordinates from there, in order. Why: even
+ *    asked for 64 places ahead, each read of a run in the input is a miss of the caches and
+ *    of the TLB (a run's elements lie 5 kB apart in 240 MB at N = 1e7, each on its own 4 kB
+ *    page), and steps 3-4 went from 15.5 cycles per element at 1e4 to about 65 at 1e7
+ *    (rdtsc); the copy is one pass in element order that writes into a few hundred streams.
+ *    Measured (Zen 4, random order, one thread, interleaved, min / median of 4 processes of
+ *    three detections, ns per element): N = 1e7 101.0 / 104.4 -> 87.6 / 88.3 (preparation
+ *    3.6 -> 6.7, search 95.7 -> 79.5), within 1.3x of N = 1e4 (69.4-70.4, unchanged); 3e6
+ *    88.6 / 89.2 -> 86.4 / 88.6; at 1e6, 24 MB, where the input's lines come from L3, even
+ *    (88.3 -> 89.1, a prototype), and it is not done. The same pairs in the same order. In
+ *    2D it lost (1e7, 4,000 rows: 59.3 -> 57.5 at best, preparation 6.7 -> 12.9: the scatter
+ *    into that many rows costs what the walks save) and is not done. NBS_NBS_ORDER=always or
+ *    never, read when a context is created, overrides the size, for the tests and for
+ *    comparisons;
  *  - 3D: the layer block. Steps 3 and 4 copy each element they meet (coordinates, radius,
  *    number) into the next entry of a block that holds the central layer and the layer
  *    below it, and the y- and x-lists link entries of the block instead of elements
@@ -254,6 +273,8 @@
  * fullest layer's count F and 4 sqrt(F) entries of 32 bytes (and a radius each) the first time,
  * grown the same way; nothing in it outlives a detection but the sentinel, which is written
  * at every detection.
+ * The elements in layer order (3D, an input over NBS__NBS_ORDER_MIN) are a third allocation
+ * (ctx->nbs_order) of exactly N * 3 doubles (4 with radii), grown only for a larger N.
  * All heads are contiguous at the start, and between detections every head is NBS__EMPTY
  * and every count 0 (the book's step 0, done once when the layout is created); the next
  * arrays, the records and the block need no initialisation because an entry is always
@@ -294,6 +315,13 @@ int8_t nbs__nbs_rows_mode(void) {
   return 0;
 }
 
+int8_t nbs__nbs_order_mode(void) {
+  const char *e = getenv("NBS_NBS_ORDER");
+  if (e && strcmp(e, "always") == 0) return 1;
+  if (e && strcmp(e, "never") == 0) return -1;
+  return 0;
+}
+
 typedef struct nbs__nbs_layout {
   size_t bytes;       /* heads, counts, records and the runs */
   int32_t *C;         /* z-list heads (3D only): where each layer's run starts in Z */
@@ -303,6 +331,9 @@ typedef struct nbs__nbs_layout {
   int32_t *A1;        /* x-list heads of the neighbouring rows */
   int32_t *CN;        /* number of elements of each z-list (2D: y-list; see the block) */
   int32_t *Z, *Y;     /* the runs of the elements' lists (N ints): Z in 3D, Y in 2D */
+  double *XS;         /* the elements in layer order (3D, ctx->nbs_order): element Z[p]'s
+                       * coordinates at XS[p * S], S = 3 (4 with radii: the radius last);
+                       * NULL where the runs' walks read the input */
   /* The heads each set's lists were started at, in the order they were started: at most
    * ny (RB0, RB1; 3D only) and nx (RA0, RA1) entries; RC, the layers (2D: rows) in the
    * order step 1 met their first element, at most nz (ny). */
@@ -955,37 +986,51 @@ nbs__nbs_retake(const nbs__nbs_axes *g, const nbs__nbs_block *K, int dim, int32_
   NBS__NBS_PUSH(l, *(dim == 3 ? &K->Y[l] : &q->X), H, i, R, *top);
 }
 
-/* Copies element k into entry l of the block and pushes that entry as nbs__nbs_retake
- * does: steps 3 and 4 for one element. */
+/* Copies element k, whose coordinates are p[0..dim) and radius *r (where the input has
+ * radii), into entry l of the block and pushes that entry as nbs__nbs_retake does: steps 3
+ * and 4 for one element. */
 static inline __attribute__((always_inline)) void
 nbs__nbs_take(const nbs__run *run, const nbs__nbs_axes *g, const nbs__nbs_block *K, int dim,
-              int32_t k, int32_t l, int32_t *H, int32_t *R, int32_t *top) {
-  const double *p = run->x + (size_t)k * (size_t)dim;
+              int32_t k, const double *p, const double *r, int32_t l, int32_t *H, int32_t *R,
+              int32_t *top) {
   nbs__nbs_entry *q = &K->e[l];
   q->x[0] = p[0];
   q->x[1] = p[1];
   if (dim == 3) q->x[2] = p[2];
-  if (run->r) K->r[l] = run->r[k];
+  if (run->r) K->r[l] = *r;
   q->id = k;
   nbs__nbs_retake(g, K, dim, l, H, R, top);
 }
 
 /* Steps 3-4 for a layer (2D: a row) whose z-list is the run ids[0..len) of Z: each element
  * taken (nbs__nbs_take) into entries l0, l0 + step, ... of the ring of cap entries (step 1,
- * or -1 from the block's end for the layer below). The run gives the elements ahead of the
- * walk, so each one's coordinates (both ends: in 3D a quarter of them straddle two lines)
- * and radius are asked for NBS__NBS_FAR places ahead into L2 (locality 1: no L1 miss
- * buffer held while memory answers) and NBS__NBS_NEAR ahead into L1, as cellsort's gather
- * does (nbs__cs_prefetch). Distances of 32/8, 128/32 and 256/16 measured the same
- * (3D, N = 1e7, interleaved, min of 3: 113.0, 116.6, 115.5, 107.9 ns per element, noise). */
+ * or -1 from the block's end for the layer below). With xs (the elements in layer order, 3D:
+ * the run's coordinates, S doubles per element, the radius last where there are radii), the
+ * walk reads them in order. Without, it reads them from the input, where the run gives the
+ * elements ahead of the walk: each one's coordinates (both ends: in 3D a quarter of them
+ * straddle two lines) and radius are asked for NBS__NBS_FAR places ahead into L2 (locality
+ * 1: no L1 miss buffer held while memory answers) and NBS__NBS_NEAR ahead into L1, as
+ * cellsort's gather does (nbs__cs_prefetch). Distances of 32/8, 128/32 and 256/16 measured
+ * the same (3D, N = 1e7, interleaved, min of 3: 113.0, 116.6, 115.5, 107.9 ns per element,
+ * noise). */
 #define NBS__NBS_FAR 64
 #define NBS__NBS_NEAR 16
 static inline __attribute__((always_inline)) void
 nbs__nbs_run(const nbs__run *run, const nbs__nbs_axes *g, const nbs__nbs_block *K, int dim,
-             const int32_t *ids, int32_t len, int32_t l0, int32_t cap, int32_t *H, int32_t *R,
-             int32_t *top, int step) {
+             const int32_t *ids, const double *xs, int32_t len, int32_t l0, int32_t cap,
+             int32_t *H, int32_t *R, int32_t *top, int step) {
   const double *x = run->x, *r = run->r;
   int32_t l = l0;
+  if (xs) {
+    const size_t S = (size_t)dim + (r ? 1 : 0);
+    for (int32_t j = 0; j < len; j++) {
+      const double *p = xs + (size_t)j * S;
+      nbs__nbs_take(run, g, K, dim, ids[j], p, p + dim, l, H, R, top);
+      l += step;
+      l = l == cap ? 0 : l;
+    }
+    return;
+  }
   for (int32_t j = 0; j < len; j++) {
     if (j + NBS__NBS_FAR < len) {
       const int32_t k = ids[j + NBS__NBS_FAR];
@@ -1001,7 +1046,9 @@ nbs__nbs_run(const nbs__run *run, const nbs__nbs_axes *g, const nbs__nbs_block *
       __builtin_prefetch(p + dim - 1);
       if (r) __builtin_prefetch(r + k);
     }
-    nbs__nbs_take(run, g, K, dim, ids[j], l, H, R, top);
+    const int32_t k = ids[j];
+    nbs__nbs_take(run, g, K, dim, k, x + (size_t)k * (size_t)dim, r ? r + k : NULL, l, H, R,
+                  top);
     l += step;
     l = l == cap ? 0 : l;
   }
@@ -1143,9 +1190,27 @@ nbs__nbs_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bool 
     at += CN[RC[i]];
     C[RC[i]] = at;
   }
-  for (int32_t k = 0; k < n; k++) {
-    const int32_t iz = nbs__nbs_cell(g, x, dim, k, a);
-    Z[--C[iz]] = k;
+  double *restrict XS = L->XS;
+  const size_t S = (size_t)dim + (run->r ? 1 : 0);
+  if (XS) { /* (3D: and each element's coordinates and radius to its place; see "The elements
+             * in layer order" in the file comment) */
+    const double *restrict r = run->r;
+    for (int32_t k = 0; k < n; k++) {
+      const int32_t iz = nbs__nbs_cell(g, x, dim, k, a);
+      const int32_t at = --C[iz];
+      Z[at] = k;
+      const double *p = x + (size_t)k * (size_t)dim;
+      double *q = XS + (size_t)at * S;
+      q[0] = p[0];
+      q[1] = p[1];
+      q[2] = p[2];
+      if (r) q[3] = r[k];
+    }
+  } else {
+    for (int32_t k = 0; k < n; k++) {
+      const int32_t iz = nbs__nbs_cell(g, x, dim, k, a);
+      Z[--C[iz]] = k;
+    }
   }
 
   /* The block: as many entries as the largest layer and the one below it hold. */
@@ -1181,8 +1246,12 @@ nbs__nbs_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bool 
      * down. R0 records the lists of the central layer in the order in which this walk meets
      * their first element. */
     int32_t n0 = 0, n1 = 0;
-    nbs__nbs_run(run, g, &K, dim, Z + C[iz], m, 0, cap, H0, R0, &n0, 1);
-    if (mu > 0) nbs__nbs_run(run, g, &K, dim, Z + C[iu], mu, cap - 1, cap, H1, R1, &n1, -1);
+    nbs__nbs_run(run, g, &K, dim, Z + C[iz], XS ? XS + (size_t)C[iz] * S : NULL, m, 0, cap, H0,
+                 R0, &n0, 1);
+    if (mu > 0) {
+      nbs__nbs_run(run, g, &K, dim, Z + C[iu], XS ? XS + (size_t)C[iu] * S : NULL, mu, cap - 1,
+                   cap, H1, R1, &n1, -1);
+    }
     if (dim == 3 && K.se) { /* each layer's rows together (nbs__nbs_rows) */
       nbs__nbs_rows(g, &K, H0, R0, n0, 0, m, cap);
       nbs__nbs_rows(g, &K, H1, R1, n1, cap - mu, mu, cap);
@@ -1208,7 +1277,8 @@ nbs__nbs_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bool 
       s = s + len;
       s = s >= cap ? s - cap : s;
       len = ~CN[iz];
-      nbs__nbs_run(run, g, &K, dim, Z + C[iz], len, s, cap, H0, R0, &n0, 1);
+      nbs__nbs_run(run, g, &K, dim, Z + C[iz], XS ? XS + (size_t)C[iz] * S : NULL, len, s, cap,
+                   H0, R0, &n0, 1);
       /* (the layer below, the one just done, is in rows already: retaken in order) */
       if (dim == 3 && K.se) nbs__nbs_rows(g, &K, H0, R0, n0, s, len, cap);
       NBS__NBS_TRY(nbs__nbs_central(run, L, g, &K, dim, s, len, cap, n0, n1));
@@ -1417,6 +1487,36 @@ bool nbs__nbs_fold(const nbs__run *run, int64_t lists[3]) {
   return folded;
 }
 
+bool nbs__nbs_ordered(const nbs_context *ctx, int dim, int64_t n, bool radii) {
+  if (dim != 3 || n < 1 || ctx->nbs_order_mode < 0) return false;
+  return ctx->nbs_order_mode > 0 ||
+         (uint64_t)n * (uint64_t)(dim + (radii ? 1 : 0)) * sizeof(double) > NBS__NBS_ORDER_MIN;
+}
+
+/* Makes ctx->nbs_order hold the elements in layer order: n * S doubles (S = 3, 4 with
+ * radii), exactly (a time step has the same n; a later, larger n grows it). */
+static nbs_status nbs__nbs_order_reserve(nbs__run *run) {
+  nbs_context *ctx = run->ctx;
+  const uint64_t S = (uint64_t)run->dim + (run->r ? 1 : 0);
+  const uint64_t bytes = (uint64_t)run->n * S * sizeof(double);
+  if (bytes > SIZE_MAX) {
+    return nbs__fail(ctx, NBS_ERR_NOMEM, -1,
+                     "nbs: %llu bytes of elements in layer order cannot be addressed",
+                     (unsigned long long)bytes);
+  }
+  if (bytes <= ctx->nbs_order_size) return NBS_OK;
+  void *p = nbs__alloc(ctx, (size_t)bytes);
+  if (!p) {
+    return nbs__fail(ctx, NBS_ERR_NOMEM, -1,
+                     "nbs: cannot allocate %llu bytes for the elements in layer order",
+                     (unsigned long long)bytes);
+  }
+  nbs__free(ctx, ctx->nbs_order, ctx->nbs_order_size);
+  ctx->nbs_order = p;
+  ctx->nbs_order_size = (size_t)bytes;
+  return NBS_OK;
+}
+
 nbs_status nbs__nbs(nbs__run *run) {
   nbs_context *ctx = run->ctx;
   const nbs__grid *g = &run->grid;
@@ -1510,7 +1610,12 @@ nbs_status nbs__nbs(nbs__run *run) {
 
   nbs__nbs_layout L;
   nbs__nbs_layout_at(&L, ctx->work, dim, ctx->work_cap);
+  L.XS = NULL;
+  if (nbs__nbs_ordered(ctx, dim, run->n, run->r != NULL)) {
+    NBS__TRY(nbs__nbs_order_reserve(run));
+    L.XS = ctx->nbs_order;
+  }
   const nbs_status s = dim == 2 ? nbs__nbs_2d(run, &L, axes) : nbs__nbs_3d(run, &L, axes);
-  run->work_bytes = L.bytes + ctx->nbs_block_size;
+  run->work_bytes = L.bytes + ctx->nbs_block_size + ctx->nbs_order_size;
   return s;
 }

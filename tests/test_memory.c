@@ -99,6 +99,14 @@ static void test_nbs_formula(void) {
           formula = ints * 4 + (((block + 1) * entry + 7) & ~(int64_t)7) +
                     copy * (32 + (in.radii ? 8 : 0));
         }
+        /* 3D with the elements in layer order (an input of more than NBS__NBS_ORDER_MIN
+         * bytes, or NBS_NBS_ORDER=always): each element's coordinates and radius, 3 or 4
+         * doubles */
+        const int S = dim + (in.radii ? 1 : 0);
+        const bool large = (size_t)n * (size_t)S * sizeof(double) > NBS__NBS_ORDER_MIN;
+        if (dim == 3 && (nbs__nbs_order_mode() > 0 || (nbs__nbs_order_mode() == 0 && large))) {
+          formula += n * S * (int64_t)sizeof(double);
+        }
         int64_t extra = (int64_t)st.work_bytes - formula;
         CHECK_MSG(extra >= 0 && extra <= 128,
                   "%dD %s n=%lld fraction %g: NBS holds %zu work bytes, the formula %lld",
