@@ -505,12 +505,10 @@ int8_t nbs__nbs_rows_mode(void);
  * where the input's coordinates and radii are larger than this (munjiza_nbs.c, "The elements
  * in layer order"): about the last-level cache of the machines measured, below which the
  * walks' random reads of the input are answered from it and the copy only costs (N = 1e6,
- * 24 MB: 88.3 -> 89.1 ns per element; 3e6, 72 MB, 95.1 -> 90.9; 1e7 -17%). */
+ * 24 MB: 88.3 -> 89.1 ns per element, a prototype; 3e6, 72 MB, 88.6 -> 86.4; 1e7 101.0 ->
+ * 87.6). */
 #define NBS__NBS_ORDER_MIN ((size_t)32 << 20)
 int8_t nbs__nbs_order_mode(void);
-/* Whether NBS's detection of n elements in dimension dim (with radii or not) puts them in
- * layer order, on context ctx. */
-bool nbs__nbs_ordered(const nbs_context *ctx, int dim, int64_t n, bool radii);
 bool nbs__cellsort_tune(void);
 /* After a detection that succeeded: where it was one of cellsort's timed tries (run->cs_try),
  * its time from its start to its search, `seconds`, is recorded (nbs_context.cs_tune). */

@@ -308,19 +308,18 @@
 #define NBS__NBS_AHEAD 8
 #define NBS__NBS_AHEAD_MIN ((size_t)1 << 20)
 
-int8_t nbs__nbs_rows_mode(void) {
-  const char *e = getenv("NBS_NBS_ROWS");
+/* An override read from the environment variable `name`: "always" 1, "never" -1, else 0
+ * (by size). */
+static int8_t nbs__nbs_env_mode(const char *name) {
+  const char *e = getenv(name);
   if (e && strcmp(e, "always") == 0) return 1;
   if (e && strcmp(e, "never") == 0) return -1;
   return 0;
 }
 
-int8_t nbs__nbs_order_mode(void) {
-  const char *e = getenv("NBS_NBS_ORDER");
-  if (e && strcmp(e, "always") == 0) return 1;
-  if (e && strcmp(e, "never") == 0) return -1;
-  return 0;
-}
+int8_t nbs__nbs_rows_mode(void) { return nbs__nbs_env_mode("NBS_NBS_ROWS"); }
+
+int8_t nbs__nbs_order_mode(void) { return nbs__nbs_env_mode("NBS_NBS_ORDER"); }
 
 typedef struct nbs__nbs_layout {
   size_t bytes;       /* heads, counts, records and the runs */
@@ -1190,26 +1189,20 @@ nbs__nbs_body(nbs__run *run, const nbs__nbs_layout *L, nbs__nbs_axes axes, bool 
     at += CN[RC[i]];
     C[RC[i]] = at;
   }
+  /* (with XS, 3D, each element's coordinates and radius to the same place of XS: see "The
+   * elements in layer order" in the file comment) */
   double *restrict XS = L->XS;
-  const size_t S = (size_t)dim + (run->r ? 1 : 0);
-  if (XS) { /* (3D: and each element's coordinates and radius to its place; see "The elements
-             * in layer order" in the file comment) */
-    const double *restrict r = run->r;
-    for (int32_t k = 0; k < n; k++) {
-      const int32_t iz = nbs__nbs_cell(g, x, dim, k, a);
-      const int32_t at = --C[iz];
-      Z[at] = k;
+  const double *restrict r = run->r;
+  const size_t S = (size_t)dim + (r ? 1 : 0);
+  for (int32_t k = 0; k < n; k++) {
+    const int32_t iz = nbs__nbs_cell(g, x, dim, k, a);
+    const int32_t at = --C[iz];
+    Z[at] = k;
+    if (XS) {
       const double *p = x + (size_t)k * (size_t)dim;
       double *q = XS + (size_t)at * S;
-      q[0] = p[0];
-      q[1] = p[1];
-      q[2] = p[2];
-      if (r) q[3] = r[k];
-    }
-  } else {
-    for (int32_t k = 0; k < n; k++) {
-      const int32_t iz = nbs__nbs_cell(g, x, dim, k, a);
-      Z[--C[iz]] = k;
+      for (int c = 0; c < dim; c++) q[c] = p[c];
+      if (r) q[dim] = r[k];
     }
   }
 
@@ -1487,7 +1480,9 @@ bool nbs__nbs_fold(const nbs__run *run, int64_t lists[3]) {
   return folded;
 }
 
-bool nbs__nbs_ordered(const nbs_context *ctx, int dim, int64_t n, bool radii) {
+/* Whether NBS's detection of n elements in dimension dim (with radii or not) puts them in
+ * layer order on context ctx: 3D, and an input over NBS__NBS_ORDER_MIN or NBS_NBS_ORDER. */
+static bool nbs__nbs_ordered(const nbs_context *ctx, int dim, int64_t n, bool radii) {
   if (dim != 3 || n < 1 || ctx->nbs_order_mode < 0) return false;
   return ctx->nbs_order_mode > 0 ||
          (uint64_t)n * (uint64_t)(dim + (radii ? 1 : 0)) * sizeof(double) > NBS__NBS_ORDER_MIN;
