@@ -211,6 +211,26 @@
  * the same order: the sample's cost, within the noise); below 512 KiB unchanged (N = 1e4,
  * always put in rows: 75.0 -> 79.5; 1e5 even). NBS_NBS_ROWS=always or never, read when a
  * context is created, overrides the size, for the tests and for comparisons.
+ * Tried and left out (Zen 4, random order, one thread, interleaved, min of 2-5 processes of
+ * three detections, ns per element, in a slow spell of the machine; db5e4c0 against each):
+ *  - in 2D, each row's entries laid out by their cells the same way: N = 1e4 30.6 -> 35.1,
+ *    1e6 69.0-69.7 -> 71.5-73.0, 1e7 65.4-68.7 -> 72.6-73.1, an input in row order at 1e7
+ *    49.0 -> 52.9;
+ *  - with the elements in layer order, each layer taken from XS straight to its rows'
+ *    places (a pass that counts the rows, then each element to its row's next place: no
+ *    copy to K->se and back; the same pairs in the same order): N = 1e7 89.9-93.7 ->
+ *    91.1-91.3, 3e6 87.5 -> 91.6;
+ *  - the rows laid out in increasing y, not in the order the walk meets them (1e7, the
+ *    input in layer order, 88.8 -> 94.6);
+ *  - each row's entries in x order too, by a counting sort of each row through the x-list
+ *    heads after the rows (1e7, the input in layer order, 84.1 -> 85.6; random 86.2 -> 90.0),
+ *    or of the whole layer by cell in the rows' one scatter (88.0 -> 93.4; random 93.2 ->
+ *    90.8): perf puts the sort at 7-10 ns per element, about what the walks and the cell
+ *    checks save.
+ * Yet an input already so (in layer order, each layer's rows together in any order, each
+ * row in x order; the rows then left as they are) runs N = 1e7 at 73.5-76.2, against
+ * 83.6-85.7 with each row's elements in random order, its rows together as well: the block
+ * laid out alike in both, what else that order speeds up was not found.
  *
  * Measured on the 2-core AMD EPYC of bench/README.md, N = 1e6, fraction 0.5, random order,
  * one thread, before and after the deviations that are about speed, back to back: 3D 548 ->
