@@ -226,11 +226,14 @@
  *    heads after the rows (1e7, the input in layer order, 84.1 -> 85.6; random 86.2 -> 90.0),
  *    or of the whole layer by cell in the rows' one scatter (88.0 -> 93.4; random 93.2 ->
  *    90.8): perf puts the sort at 7-10 ns per element, about what the walks and the cell
- *    checks save.
- * Yet an input already so (in layer order, each layer's rows together in any order, each
- * row in x order; the rows then left as they are) runs N = 1e7 at 73.5-76.2, against
- * 83.6-85.7 with each row's elements in random order, its rows together as well: the block
- * laid out alike in both, what else that order speeds up was not found.
+ *    checks save;
+ *  - step 1's copy by layer and row (a count of each layer's rows, then each element to its
+ *    row's place, so that the layers come in rows and are left as they are): N = 1e7
+ *    preparation 8.6 -> 24.3, the search the same (84.9 -> 84.0).
+ * An input already in layer order, each layer's rows together and each row in x order (the
+ * rows then left as they are), runs N = 1e7 at 74.1-76.4 (min of 6; medians 82.1-82.2),
+ * against 83.6 (90.8) with each row's elements in random order: the x order is worth about
+ * 8 ns per element there, and a sort that costs less than that is what is missing.
  *
  * Measured on the 2-core AMD EPYC of bench/README.md, N = 1e6, fraction 0.5, random order,
  * one thread, before and after the deviations that are about speed, back to back: 3D 548 ->
