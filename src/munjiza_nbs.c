@@ -225,8 +225,9 @@
  *  - each row's entries in x order too, by a counting sort of each row through the x-list
  *    heads after the rows (1e7, the input in layer order, 84.1 -> 85.6; random 86.2 -> 90.0),
  *    or of the whole layer by cell in the rows' one scatter (88.0 -> 93.4; random 93.2 ->
- *    90.8): perf puts the sort at 7-10 ns per element, about what the walks and the cell
- *    checks save;
+ *    90.8), or by x and then by row, two stable scatters through K->se (random 99.6 ->
+ *    108.8, min of 6): perf puts the sort at 7-10 ns per element, about what the walks and
+ *    the cell checks save;
  *  - step 1's copy by layer and row (a count of each layer's rows, then each element to its
  *    row's place, so that the layers come in rows and are left as they are): N = 1e7
  *    preparation 8.6 -> 24.3, the search the same (84.9 -> 84.0).
