@@ -93,9 +93,13 @@
  *    88.6 / 89.2 -> 86.4 / 88.6; at 1e6, 24 MB, where the input's lines come from L3, even
  *    (88.3 -> 89.1, a prototype), and it is not done. The same pairs in the same order. In
  *    2D it lost (1e7, 4,000 rows: 59.3 -> 57.5 at best, preparation 6.7 -> 12.9: the scatter
- *    into that many rows costs what the walks save) and is not done. NBS_NBS_ORDER=always or
- *    never, read when a context is created, overrides the size, for the tests and for
- *    comparisons;
+ *    into that many rows costs what the walks save) and is not done; nor did a copy into
+ *    256 bands of 16 rows, each element's number beside its coordinates and the rows' runs
+ *    the places in their bands, so that a row's walk reads within 640 kB (1e7, interleaved,
+ *    min / median of 4: 65.6 / 78.2 -> 69.0 / 78.1, search 56.3 / 70.2 -> 51.3 / 58.8,
+ *    preparation 7.1 / 8.5 -> 15.9 / 18.3; the same pairs in the same order).
+ *    NBS_NBS_ORDER=always or never, read when a context is created, overrides the size, for
+ *    the tests and for comparisons;
  *  - 3D: the layer block. Steps 3 and 4 copy each element they meet (coordinates, radius,
  *    number) into the next entry of a block that holds the central layer and the layer
  *    below it, and the y- and x-lists link entries of the block instead of elements
