@@ -199,15 +199,20 @@ int nbs__threads(const nbs_context *ctx, int64_t useful) {
  * N = 1e7 42.3 -> 58.5 (interleaved, min of 5). Again on 585a76a (Zen 5; the kernel then gave
  * the block's huge pages, /proc/vmstat's thp_fault_alloc): auto, N = 1e6, medians of 12
  * interleaved processes 25.10 -> 25.03, N = 1e7 25.66 -> 25.51, within the noise. */
+bool nbs__replace(nbs_context *ctx, void **buf, size_t *size, size_t bytes) {
+  void *p = nbs__alloc(ctx, bytes);
+  if (!p) return false;
+  nbs__free(ctx, *buf, *size);
+  *buf = p;
+  *size = bytes;
+  return true;
+}
+
 nbs_status nbs__work_reserve(nbs_context *ctx, size_t bytes) {
   if (bytes <= ctx->work_size) return NBS_OK;
-  void *p = nbs__alloc(ctx, bytes);
-  if (!p) {
+  if (!nbs__replace(ctx, &ctx->work, &ctx->work_size, bytes)) {
     return nbs__fail(ctx, NBS_ERR_NOMEM, -1, "cannot allocate %zu bytes of work arrays", bytes);
   }
-  nbs__free(ctx, ctx->work, ctx->work_size);
-  ctx->work = p;
-  ctx->work_size = bytes;
   ctx->work_kind = NBS__WORK_NONE;
   return NBS_OK;
 }

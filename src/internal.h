@@ -299,6 +299,9 @@ static inline void nbs__search_begins(nbs__run *run) { run->t_search = nbs__now(
 /* ---- memory (context.c) ---- */
 void *nbs__alloc(nbs_context *ctx, size_t size);
 void nbs__free(nbs_context *ctx, void *p, size_t size);
+/* Replaces the context's buffer *buf of *size bytes by a new one of `bytes`, its contents
+ * not kept: false where the new one cannot be allocated (the old one is then kept). */
+bool nbs__replace(nbs_context *ctx, void **buf, size_t *size, size_t bytes);
 /* Makes ctx->work at least `bytes` long. When it has to reallocate, the old contents are
  * lost and work_kind becomes 0; on failure the old block is kept (NBS_ERR_NOMEM). */
 nbs_status nbs__work_reserve(nbs_context *ctx, size_t bytes);

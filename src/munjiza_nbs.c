@@ -875,14 +875,10 @@ static nbs_status nbs__nbs_block_reserve(nbs__run *run, int32_t need, int32_t la
     const size_t want =
         nbs__nbs_block_bytes(nbs__nbs_block_cap(need, run->n, grown),
                              nbs__nbs_block_cap(layer, run->n, grown), entry, copy, rows);
-    void *p = nbs__alloc(ctx, want);
-    if (!p) {
+    if (!nbs__replace(ctx, &ctx->nbs_block, &ctx->nbs_block_size, want)) {
       return nbs__fail(ctx, NBS_ERR_NOMEM, -1,
                        "nbs: cannot allocate %zu bytes for the layer block", want);
     }
-    nbs__free(ctx, ctx->nbs_block, ctx->nbs_block_size);
-    ctx->nbs_block = p;
-    ctx->nbs_block_size = want;
   }
   /* doubles first, then the int32 arrays: every array is aligned */
   char *w = ctx->nbs_block;
@@ -1533,15 +1529,11 @@ static nbs_status nbs__nbs_order_reserve(nbs__run *run) {
                      (unsigned long long)bytes);
   }
   if (bytes <= ctx->nbs_order_size) return NBS_OK;
-  void *p = nbs__alloc(ctx, (size_t)bytes);
-  if (!p) {
+  if (!nbs__replace(ctx, &ctx->nbs_order, &ctx->nbs_order_size, (size_t)bytes)) {
     return nbs__fail(ctx, NBS_ERR_NOMEM, -1,
                      "nbs: cannot allocate %llu bytes for the elements in layer order",
                      (unsigned long long)bytes);
   }
-  nbs__free(ctx, ctx->nbs_order, ctx->nbs_order_size);
-  ctx->nbs_order = p;
-  ctx->nbs_order_size = (size_t)bytes;
   return NBS_OK;
 }
 
