@@ -93,7 +93,12 @@
  *    88.6 / 89.2 -> 86.4 / 88.6; at 1e6, 24 MB, where the input's lines come from L3, even
  *    (88.3 -> 89.1, a prototype), and it is not done. The same pairs in the same order. In
  *    2D it lost (1e7, 4,000 rows: 59.3 -> 57.5 at best, preparation 6.7 -> 12.9: the scatter
- *    into that many rows costs what the walks save) and is not done; nor did a copy into
+ *    into that many rows costs what the walks save) and is not done, nor with the copy on
+ *    2 MiB pages (madvise(MADV_HUGEPAGE) of it, Zen 4, 1e7, 6 processes interleaved, min /
+ *    median: 57.5 / 59.1 without it, 58.3 / 60.5 with it, 57.5 / 59.4 with it on huge
+ *    pages, preparation 5.9 -> 12.3 -> 12.7, search 51.1 -> 44.6 -> 44.0: the scatter does
+ *    not wait on the TLB; 3D's copy on huge pages likewise, 87.4 / 91.2 -> 89.3 / 91.4);
+ *    nor did a copy into
  *    256 bands of 16 rows, each element's number beside its coordinates and the rows' runs
  *    the places in their bands, so that a row's walk reads within 640 kB (1e7, interleaved,
  *    min / median of 4: 65.6 / 78.2 -> 69.0 / 78.1, search 56.3 / 70.2 -> 51.3 / 58.8,
@@ -236,7 +241,10 @@
  *    or of the whole layer by cell in the rows' one scatter (88.0 -> 93.4; random 93.2 ->
  *    90.8), or by x and then by row, two stable scatters through K->se (random 99.6 ->
  *    108.8, min of 6): perf puts the sort at 7-10 ns per element, about what the walks and
- *    the cell checks save;
+ *    the cell checks save; or, coarser, by buckets of 2^s cells in x within each row, in
+ *    the rows' one scatter (a histogram of rows by buckets, capped at half the layer; Zen
+ *    5, 6d450bc, random order, min / median of 4: 1e7 66.7 / 70.0 -> s = 2 69.0 / 70.2,
+ *    s = 3 70.9 / 72.9, s = 4 70.7 / 71.1, the same pairs);
  *  - step 1's copy by layer and row (a count of each layer's rows, then each element to its
  *    row's place, so that the layers come in rows and are left as they are): N = 1e7
  *    preparation 8.6 -> 24.3, the search the same (84.9 -> 84.0).
