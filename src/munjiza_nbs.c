@@ -93,16 +93,16 @@
  *    88.6 / 89.2 -> 86.4 / 88.6; at 1e6, 24 MB, where the input's lines come from L3, even
  *    (88.3 -> 89.1, a prototype), and it is not done. The same pairs in the same order. In
  *    2D it lost (1e7, 4,000 rows: 59.3 -> 57.5 at best, preparation 6.7 -> 12.9: the scatter
- *    into that many rows costs what the walks save) and is not done, nor with the copy on
- *    2 MiB pages (madvise(MADV_HUGEPAGE) of it, Zen 4, 1e7, 6 processes interleaved, min /
- *    median: 57.5 / 59.1 without it, 58.3 / 60.5 with it, 57.5 / 59.4 with it on huge
- *    pages, preparation 5.9 -> 12.3 -> 12.7, search 51.1 -> 44.6 -> 44.0: the scatter does
+ *    into that many rows costs what the walks save) and is not done; nor with the copy on
+ *    2 MiB pages (madvise(MADV_HUGEPAGE), Zen 4, 1e7, 6 processes interleaved, min /
+ *    median: 57.5 / 59.1 without the copy, 58.3 / 60.5 with it, 57.5 / 59.4 with it on huge
+ *    pages; preparation 5.9 -> 12.3 -> 12.7, search 51.1 -> 44.6 -> 44.0: the scatter does
  *    not wait on the TLB; 3D's copy on huge pages likewise, 87.4 / 91.2 -> 89.3 / 91.4);
- *    nor did a copy into
- *    256 bands of 16 rows, each element's number beside its coordinates and the rows' runs
- *    the places in their bands, so that a row's walk reads within 640 kB (1e7, interleaved,
- *    min / median of 4: 65.6 / 78.2 -> 69.0 / 78.1, search 56.3 / 70.2 -> 51.3 / 58.8,
- *    preparation 7.1 / 8.5 -> 15.9 / 18.3; the same pairs in the same order). Nor, in 3D,
+ *    nor did a copy into 256 bands of 16 rows, each element's number beside its
+ *    coordinates and the rows' runs the places in their bands, so that a row's walk reads
+ *    within 640 kB (1e7, interleaved, min / median of 4: 65.6 / 78.2 -> 69.0 / 78.1, search
+ *    56.3 / 70.2 -> 51.3 / 58.8, preparation 7.1 / 8.5 -> 15.9 / 18.3; the same pairs in the
+ *    same order). Nor, in 3D,
  *    the copy written with streaming stores, 8 elements of a layer gathered in a buffer
  *    and stored as a whole where they lie in its run, so that the lines are not read
  *    before they are written (1e7, min / median of 4, preparation 8.4 / 10.2 -> 9.9 /
