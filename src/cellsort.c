@@ -2798,6 +2798,225 @@ static bool nbs__cs_words_boxed512(const nbs__cs_keying *kg, const double *x, in
 }
 #endif
 
+#if NBS__CS_AVX512
+/* The key passes 4 elements at a time with AVX2, for processors without AVX-512 (Zen 3,
+ * where the scalar passes were a tenth of a detection: `perf record`, 3D N = 1e6, random
+ * order). The same operations in the same order as nbs__cs_key_boxed and nbs__cs_cellkey
+ * (a subtraction, a multiplication, a truncation), so the same keys bit for bit; but AVX2
+ * truncates a double to an int32 only, so these passes run where every field of the key
+ * is below 2^31 (nbs__cs_fits4: the keying's box checked first, in the boxed passes, keeps
+ * each position t below its field's limit), and the scalar ones elsewhere. The 4 elements'
+ * coordinates, 12 doubles (2D: 8) as they lie in the input, are loaded by halves, two
+ * elements' worth per register, and sorted out by one shuffle per axis. */
+typedef struct nbs__cs_keys4 {
+  __m256d lo[3], inv[3], lim[3];
+  __m128i sy, sz;
+} nbs__cs_keys4;
+
+/* Whether the keying's fields all lie below 2^31: in the boxed passes their limits
+ * (nbs__cs_box_limits), which each position is checked against; in the unchecked pass
+ * (after input.c's, every element on the grid) the x sub-cells' field, where the others
+ * are the grid's cells, below 2^31 (an int32's, as nbs__cell_of makes them). */
+static bool nbs__cs_fits4(const nbs__cs_keying *kg, int eb, bool boxed) {
+  if (!boxed) return kg->sy <= 31;
+  double lim[3];
+  nbs__cs_box_limits(kg, eb, lim);
+  for (int a = 0; a < kg->dim; a++) {
+    if (!(lim[a] <= 2147483648.0)) return false;
+  }
+  return true;
+}
+
+static inline NBS__CS_AVX2_TARGET void nbs__cs_keys4_init(nbs__cs_keys4 *v,
+                                                        const nbs__cs_keying *kg, int eb) {
+  double lim[3];
+  nbs__cs_box_limits(kg, eb, lim);
+  for (int a = 0; a < 3; a++) {
+    v->lo[a] = _mm256_set1_pd(a == 0 ? kg->lo_x : kg->g->lo[a]);
+    v->inv[a] = _mm256_set1_pd(a == 0 ? kg->inv_fine : kg->g->inv_edge);
+    v->lim[a] = _mm256_set1_pd(lim[a]);
+  }
+  v->sy = _mm_cvtsi32_si128(kg->sy);
+  v->sz = _mm_cvtsi32_si128(kg->sz);
+}
+
+/* The 4 elements' coordinates at x4, by element axis (p[0] x, p[1] y, p[2] z). */
+static inline __attribute__((always_inline)) NBS__CS_AVX2_TARGET void
+nbs__cs_load4(const double *x4, int dim, __m256d p[3]) {
+  if (dim == 3) {
+    /* x0 y0 | x2 y2, z0 x1 | z2 x3, y1 z1 | y3 z3 */
+    const __m256d a = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(x4)),
+                                           _mm_loadu_pd(x4 + 6), 1);
+    const __m256d b = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(x4 + 2)),
+                                           _mm_loadu_pd(x4 + 8), 1);
+    const __m256d c = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(x4 + 4)),
+                                           _mm_loadu_pd(x4 + 10), 1);
+    p[0] = _mm256_shuffle_pd(a, b, 0xA);
+    p[1] = _mm256_shuffle_pd(a, c, 0x5);
+    p[2] = _mm256_shuffle_pd(b, c, 0xA);
+  } else {
+    /* x0 y0 | x2 y2, x1 y1 | x3 y3 */
+    const __m256d a = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(x4)),
+                                           _mm_loadu_pd(x4 + 4), 1);
+    const __m256d b = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(x4 + 2)),
+                                           _mm_loadu_pd(x4 + 6), 1);
+    p[0] = _mm256_unpacklo_pd(a, b);
+    p[1] = _mm256_unpackhi_pd(a, b);
+  }
+}
+
+/* The 4 elements' keys (64-bit lanes) from their coordinates by key axis (c); with `check`,
+ * false if one lies outside the keying's box or a coordinate is not finite. */
+static inline __attribute__((always_inline)) NBS__CS_AVX2_TARGET bool
+nbs__cs_key4_of(const nbs__cs_keys4 *v, const __m256d c[3], int dim, bool check, __m256i *key) {
+  __m256d in = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+  __m256i k = _mm256_setzero_si256();
+  for (int a = 0; a < dim; a++) {
+    const __m256d t = _mm256_mul_pd(_mm256_sub_pd(c[a], v->lo[a]), v->inv[a]);
+    if (check) {
+      /* NaN fails both */
+      in = _mm256_and_pd(in, _mm256_and_pd(_mm256_cmp_pd(t, _mm256_setzero_pd(), _CMP_GE_OQ),
+                                           _mm256_cmp_pd(t, v->lim[a], _CMP_LT_OQ)));
+    }
+    const __m256i i = _mm256_cvtepu32_epi64(_mm256_cvttpd_epi32(t));
+    k = a == 0 ? i : _mm256_or_si256(k, _mm256_sll_epi64(i, a == 1 ? v->sy : v->sz));
+  }
+  *key = k;
+  return !check || _mm256_movemask_pd(in) == 0xF;
+}
+
+/* The lanes' boxes (lo, hi by key axis) into box. */
+static inline __attribute__((always_inline)) NBS__CS_AVX2_TARGET void
+nbs__cs_box4_done(const __m256d lo[3], const __m256d hi[3], const nbs__cs_keying *kg, int dim,
+                  nbs__cs_box *box) {
+  for (int a = 0; a < dim; a++) {
+    double l[4], h[4];
+    _mm256_storeu_pd(l, lo[a]);
+    _mm256_storeu_pd(h, hi[a]);
+    const int ca = kg->c[a];
+    for (int j = 0; j < 4; j++) {
+      if (l[j] < box->lo[ca]) box->lo[ca] = l[j];
+      if (h[j] > box->hi[ca]) box->hi[ca] = h[j];
+    }
+  }
+}
+
+/* nbs__cs_words_boxed, and with `boxed` false the words alone, unchecked (nbs__cs_words256),
+ * 4 elements at a time: their box so far per lane. */
+static inline __attribute__((always_inline)) NBS__CS_AVX2_TARGET bool
+nbs__cs_words256_body(const nbs__cs_keying *kg, const double *x, int dim, int32_t from,
+                      int32_t to, int eb, uint64_t *k0, bool boxed, nbs__cs_box *box,
+                      const nbs__cs_tally *ty) {
+  nbs__cs_keys4 v;
+  nbs__cs_keys4_init(&v, kg, eb);
+  __m256d lo[3], hi[3];
+  for (int a = 0; a < 3; a++) {
+    lo[a] = _mm256_set1_pd(DBL_MAX);
+    hi[a] = _mm256_set1_pd(-DBL_MAX);
+  }
+  const __m128i sh = _mm_cvtsi32_si128(eb);
+  const __m128i tsh = _mm_cvtsi32_si128(ty ? ty->shift : 0);
+  const __m256i four = _mm256_set1_epi64x(4);
+  __m256i ks = _mm256_add_epi64(_mm256_set_epi64x(3, 2, 1, 0), _mm256_set1_epi64x(from));
+  int32_t e = from;
+  for (; to - e >= 4; e += 4) {
+    __m256d p[3], c[3];
+    nbs__cs_load4(x + (size_t)e * (size_t)dim, dim, p);
+    for (int a = 0; a < dim; a++) c[a] = p[kg->c[a]];
+    __m256i key;
+    if (!nbs__cs_key4_of(&v, c, dim, boxed, &key)) return false;
+    if (boxed) {
+      for (int a = 0; a < dim; a++) {
+        lo[a] = _mm256_min_pd(lo[a], c[a]);
+        hi[a] = _mm256_max_pd(hi[a], c[a]);
+      }
+    }
+    if (ty) {
+      uint64_t d[4];
+      _mm256_storeu_si256((void *)d, _mm256_srl_epi64(key, tsh));
+      for (int l = 0; l < 4; l++) ty->h[d[l] & ty->mask]++;
+      continue;
+    }
+    _mm256_storeu_si256((void *)(k0 + e), _mm256_or_si256(_mm256_sll_epi64(key, sh), ks));
+    ks = _mm256_add_epi64(ks, four);
+  }
+  if (!boxed) {
+    for (; e < to; e++) k0[e] = nbs__cs_cellkey(kg, x + (size_t)e * (size_t)dim) << eb | (uint64_t)e;
+    return true;
+  }
+  nbs__cs_box4_done(lo, hi, kg, dim, box);
+  return nbs__cs_words_boxed(kg, x, dim, e, to, eb, k0, box, ty);
+}
+
+/* The packed words key << eb | k of the elements [from, to), 4 at a time where the
+ * keying's fields fit (nbs__cs_fits4). */
+NBS__CS_AVX2_TARGET
+static void nbs__cs_words256(const nbs__cs_keying *kg, const double *x, int32_t from, int32_t to,
+                             int eb, uint64_t *k0) {
+  if (kg->dim == 3) nbs__cs_words256_body(kg, x, 3, from, to, eb, k0, false, NULL, NULL);
+  else nbs__cs_words256_body(kg, x, 2, from, to, eb, k0, false, NULL, NULL);
+}
+
+NBS__CS_AVX2_TARGET
+static bool nbs__cs_words_boxed256(const nbs__cs_keying *kg, const double *x, int32_t from,
+                                   int32_t to, int eb, uint64_t *k0, nbs__cs_box *box,
+                                   const nbs__cs_tally *ty) {
+  if (kg->dim == 3) return nbs__cs_words256_body(kg, x, 3, from, to, eb, k0, true, box, ty);
+  return nbs__cs_words256_body(kg, x, 2, from, to, eb, k0, true, box, ty);
+}
+/* nbs__cs_changed 4 elements at a time (the time steps' keys: eb = 32, where the keys fit
+ * 31 bits and nbs__cs_fits4 holds), each lane's key against keys[]. */
+static inline __attribute__((always_inline)) NBS__CS_AVX2_TARGET int64_t
+nbs__cs_changed256_body(const nbs__cs_keying *kg, const double *x, int dim, int32_t from,
+                        int32_t to, uint32_t *keys, uint64_t *r, uint64_t *s, int64_t share,
+                        nbs__cs_box *box) {
+  nbs__cs_keys4 v;
+  nbs__cs_keys4_init(&v, kg, 32);
+  __m256d lo[3], hi[3];
+  for (int a = 0; a < 3; a++) {
+    lo[a] = _mm256_set1_pd(DBL_MAX);
+    hi[a] = _mm256_set1_pd(-DBL_MAX);
+  }
+  const __m256i low = _mm256_set_epi32(7, 5, 3, 1, 6, 4, 2, 0); /* each lane's low half */
+  int64_t m = 0;
+  int32_t e = from;
+  for (; to - e >= 4; e += 4) {
+    __m256d p[3], c[3];
+    nbs__cs_load4(x + (size_t)e * (size_t)dim, dim, p);
+    for (int a = 0; a < dim; a++) c[a] = p[kg->c[a]];
+    __m256i key;
+    if (!nbs__cs_key4_of(&v, c, dim, true, &key)) return NBS__CS_OUT;
+    for (int a = 0; a < dim; a++) {
+      lo[a] = _mm256_min_pd(lo[a], c[a]);
+      hi[a] = _mm256_max_pd(hi[a], c[a]);
+    }
+    const __m128i k = _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(key, low));
+    const __m128i old = _mm_loadu_si128((const void *)(keys + e));
+    unsigned ne = ~(unsigned)_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(k, old))) & 0xFu;
+    if (ne == 0) continue;
+    uint32_t kk[4];
+    _mm_storeu_si128((void *)kk, k);
+    for (; ne; ne &= ne - 1) {
+      const int l = __builtin_ctz(ne);
+      if (m == share) return -1;
+      r[m] = (uint64_t)keys[e + l] << 32 | (uint64_t)(e + l);
+      s[m++] = (uint64_t)kk[l] << 32 | (uint64_t)(e + l);
+      keys[e + l] = kk[l];
+    }
+  }
+  nbs__cs_box4_done(lo, hi, kg, dim, box);
+  return nbs__cs_changed(kg, x, dim, e, to, keys, r, s, m, share, box);
+}
+
+NBS__CS_AVX2_TARGET
+static int64_t nbs__cs_changed256(const nbs__cs_keying *kg, const double *x, int32_t from,
+                                  int32_t to, uint32_t *keys, uint64_t *r, uint64_t *s,
+                                  int64_t share, nbs__cs_box *box) {
+  if (kg->dim == 3) return nbs__cs_changed256_body(kg, x, 3, from, to, keys, r, s, share, box);
+  return nbs__cs_changed256_body(kg, x, 2, from, to, keys, r, s, share, box);
+}
+#endif
+
 /* The bytes of the input's coordinates and radii, which choose the gather's path
  * (NBS__CS_PREFETCH_MIN, nbs__cellsort_partition_min). */
 static size_t nbs__input_bytes(int32_t n, int dim, bool radii) {
@@ -3419,6 +3638,8 @@ static int64_t nbs__cs_changes(const nbs__run *run, const nbs__cs_keying *kg, ui
 #if NBS__CS_AVX512
     if (run->ctx->simd == NBS__SIMD_AVX512) {
       m = nbs__cs_changed512(&kl, x, from, to, keys, r, s, share, box);
+    } else if (run->ctx->simd == NBS__SIMD_AVX2 && nbs__cs_fits4(&kl, 32, true)) {
+      m = nbs__cs_changed256(&kl, x, from, to, keys, r, s, share, box);
     } else
 #endif
     {
@@ -4888,6 +5109,16 @@ static void nbs__cs_sort_gather(const nbs__cs *c, nbs__run *run, const nbs__cs_k
         nbs__cs_words512(&kl, x, f, to, eb, k0);
       }
 #endif
+    } else if (packed && run->ctx->simd == NBS__SIMD_AVX2 && nbs__cs_fits4(&kl, eb, false)) {
+#if NBS__CS_AVX512
+#if defined(_OPENMP)
+#pragma omp parallel num_threads(threads) if (threads > 1)
+#endif
+      NBS__PARTS(t, threads) {
+        const int32_t f = nbs__chunk(n, t, threads), to = nbs__chunk(n, t + 1, threads);
+        nbs__cs_words256(&kl, x, f, to, eb, k0);
+      }
+#endif
     } else {
 #if defined(_OPENMP)
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
@@ -5387,6 +5618,8 @@ bool nbs__cellsort_fresh(nbs__run *run, const nbs_input *in, nbs_algorithm asked
 #if NBS__CS_AVX512
     if (ctx->simd == NBS__SIMD_AVX512) {
       in_box = nbs__cs_words_boxed512(&kl, x, from, to, plan.eb, k0, box, tally ? &ty : NULL);
+    } else if (ctx->simd == NBS__SIMD_AVX2 && nbs__cs_fits4(&kl, plan.eb, true)) {
+      in_box = nbs__cs_words_boxed256(&kl, x, from, to, plan.eb, k0, box, tally ? &ty : NULL);
     } else
 #endif
     {
