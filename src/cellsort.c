@@ -2447,6 +2447,22 @@ static inline uint64_t nbs__cs_cellkey(const nbs__cs_keying *kg, const double *x
   return iz << kg->sz | iy << kg->sy | ix;
 }
 
+/* The changed lanes ne (a bit per lane) of the keys kk of elements e, e + 1, ...: each one's
+ * old word keys[e + l] << 32 | (e + l) to r, its new one to s (*m of them so far), and
+ * keys[e + l] the new key; false past `share` of them. The SIMD key passes' common tail
+ * (nbs__cs_note8, nbs__cs_changed256_body). */
+static inline bool nbs__cs_note_lanes(const uint32_t *kk, unsigned ne, uint32_t *keys, int32_t e,
+                                      uint64_t *r, uint64_t *s, int64_t *m, int64_t share) {
+  for (; ne; ne &= ne - 1) {
+    const int l = __builtin_ctz(ne);
+    if (*m == share) return false;
+    r[*m] = (uint64_t)keys[e + l] << 32 | (uint64_t)(e + l);
+    s[(*m)++] = (uint64_t)kk[l] << 32 | (uint64_t)(e + l);
+    keys[e + l] = kk[l];
+  }
+  return true;
+}
+
 #if NBS__CS_AVX512
 /* nbs__cs_cellkey for 8 consecutive elements at once (AVX-512: F, DQ), the same operations
  * in the same order (a subtraction, a multiplication, a truncation: the same keys bit for
@@ -2511,14 +2527,7 @@ nbs__cs_note8(__m256i k, uint32_t *keys, int32_t e, uint64_t *r, uint64_t *s, in
   if (ne == 0) return true;
   uint32_t kk[8];
   _mm256_storeu_si256((void *)kk, k);
-  for (; ne; ne &= ne - 1) {
-    const int l = __builtin_ctz(ne);
-    if (*m == share) return false;
-    r[*m] = (uint64_t)keys[e + l] << 32 | (uint64_t)(e + l);
-    s[(*m)++] = (uint64_t)kk[l] << 32 | (uint64_t)(e + l);
-    keys[e + l] = kk[l];
-  }
-  return true;
+  return nbs__cs_note_lanes(kk, ne, keys, e, r, s, m, share);
 }
 
 #endif
@@ -2999,13 +3008,7 @@ nbs__cs_changed256_body(const nbs__cs_keying *kg, const double *x, int dim, int3
     if (ne == 0) continue;
     uint32_t kk[4];
     _mm_storeu_si128((void *)kk, k);
-    for (; ne; ne &= ne - 1) {
-      const int l = __builtin_ctz(ne);
-      if (m == share) return -1;
-      r[m] = (uint64_t)keys[e + l] << 32 | (uint64_t)(e + l);
-      s[m++] = (uint64_t)kk[l] << 32 | (uint64_t)(e + l);
-      keys[e + l] = kk[l];
-    }
+    if (!nbs__cs_note_lanes(kk, ne, keys, e, r, s, &m, share)) return -1;
   }
   nbs__cs_box4_done(lo, hi, kg, dim, box);
   return nbs__cs_changed(kg, x, dim, e, to, keys, r, s, m, share, box);
