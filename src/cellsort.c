@@ -1316,8 +1316,10 @@ NBS__CS_VARIANTS(nbs__cs_k512, NBS__CS_AVX512_TARGET NBS__CS_PLACED, nbs__cs_blo
  * N = 1e6, NBS_SIMD=avx2, 41.1 -> 42.1 ns per element.) The three forms of q's element and
  * the pairs' place a pointer, as for the AVX-512 kernel: with NBS_SIMD=avx2, 3D N = 1e6,
  * interleaved with 8851642, medians of 6, search 20.66 -> 19.94 ns per element; 2D 7.79 ->
- * 7.31. The packing permutations
- * (nbs__pack4, internal.h) serve NBS's AVX2 test too. */
+ * 7.31. In 3D the steps over the ranges only note each q that hit and its mask, and the
+ * notes become pairs after them (below). The ids' masked loads: 3D 1e6 search 29.7 ->
+ * 29.2 (2D 11.55 -> 11.47). The packing permutations (nbs__pack4, internal.h) serve NBS's
+ * AVX2 test too. */
 const int32_t nbs__pack4[16][8] = {
     {0, 0, 0, 0, 0, 0, 0, 0}, {0, 1, 0, 0, 0, 0, 0, 0}, {2, 3, 0, 0, 0, 0, 0, 0},
     {0, 1, 2, 3, 0, 0, 0, 0}, {4, 5, 0, 0, 0, 0, 0, 0}, {0, 1, 4, 5, 0, 0, 0, 0},
@@ -1325,6 +1327,24 @@ const int32_t nbs__pack4[16][8] = {
     {0, 1, 6, 7, 0, 0, 0, 0}, {2, 3, 6, 7, 0, 0, 0, 0}, {0, 1, 2, 3, 6, 7, 0, 0},
     {4, 5, 6, 7, 0, 0, 0, 0}, {0, 1, 4, 5, 6, 7, 0, 0}, {2, 3, 4, 5, 6, 7, 0, 0},
     {0, 1, 2, 3, 4, 5, 6, 7}};
+
+/* The AVX2 kernel's test of 4 lanes p (coordinates px.., radii pr) against 4 partners q:
+ * all ones in the lanes that touch (the generic kernel's operations, in its order). */
+static inline __attribute__((always_inline)) NBS__CS_AVX2_TARGET __m256d
+nbs__cs_near256(int dim, bool radii, __m256d lim, __m256d px, __m256d py, __m256d pz,
+                __m256d pr, __m256d qx, __m256d qy, __m256d qz, __m256d qr) {
+  const __m256d dx = _mm256_sub_pd(px, qx), dy = _mm256_sub_pd(py, qy);
+  __m256d d = _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy));
+  if (dim == 3) {
+    const __m256d dz = _mm256_sub_pd(pz, qz);
+    d = _mm256_add_pd(d, _mm256_mul_pd(dz, dz));
+  }
+  if (radii) {
+    const __m256d rr = _mm256_add_pd(pr, qr);
+    lim = _mm256_mul_pd(rr, rr);
+  }
+  return _mm256_cmp_pd(d, lim, _CMP_LE_OQ);
+}
 
 static inline __attribute__((always_inline)) NBS__CS_AVX2_TARGET size_t
 nbs__cs_block256_body(const nbs__cs *c, int dim, bool radii, bool contacts, int form,
@@ -1339,87 +1359,186 @@ nbs__cs_block256_body(const nbs__cs *c, int dim, bool radii, bool contacts, int 
   const __m256i ma = _mm256_cmpgt_epi64(na, _mm256_set_epi64x(3, 2, 1, 0));
   const __m256i mb = _mm256_cmpgt_epi64(na, _mm256_set_epi64x(7, 6, 5, 4));
   const unsigned im = (1u << lanes) - 1, ima = im & 0xF, imb = im >> 4;
-  /* the block, twice over: B?[l] and B?[l + 8] hold lane l (0 past the block's lanes) */
+  /* The block, twice over: B?[l] and B?[l + 8] hold lane l (0 past the block's lanes). For
+   * the steps over the ranges, half a of each coordinate holds lanes 0, 1, 4, 5 and half b
+   * lanes 2, 3, 6, 7: one signed pack of the two halves' comparisons (64-bit lanes to
+   * 32-bit, within each 128-bit half) then puts the step's 8 results in lane order, read
+   * by one movemask. */
   double BX[16], BY[16], BZ[16], BR[16];
-  int32_t BI[16];
   __m256d Xa, Xb, Ya, Yb, Za = _mm256_setzero_pd(), Zb = Za, Ra = Za, Rb = Za;
 #define NBS__CS_LOAD256(A)                                                                    \
   do {                                                                                        \
-    A##a = _mm256_maskload_pd(A + c0, ma);                                                    \
-    A##b = _mm256_maskload_pd(A + c0 + 4, mb);                                                \
-    _mm256_storeu_pd(B##A, A##a);                                                             \
-    _mm256_storeu_pd(B##A + 4, A##b);                                                         \
-    _mm256_storeu_pd(B##A + 8, A##a);                                                         \
-    _mm256_storeu_pd(B##A + 12, A##b);                                                        \
+    const __m256d A##0 = _mm256_maskload_pd(A + c0, ma);                                      \
+    const __m256d A##1 = _mm256_maskload_pd(A + c0 + 4, mb);                                  \
+    _mm256_storeu_pd(B##A, A##0);                                                             \
+    _mm256_storeu_pd(B##A + 4, A##1);                                                         \
+    _mm256_storeu_pd(B##A + 8, A##0);                                                         \
+    _mm256_storeu_pd(B##A + 12, A##1);                                                        \
+    A##a = _mm256_permute2f128_pd(A##0, A##1, 0x20);                                          \
+    A##b = _mm256_permute2f128_pd(A##0, A##1, 0x31);                                          \
   } while (0)
   NBS__CS_LOAD256(X);
   NBS__CS_LOAD256(Y);
   if (dim == 3) NBS__CS_LOAD256(Z);
   if (radii) NBS__CS_LOAD256(R);
 #undef NBS__CS_LOAD256
-  for (int l = 0; l < NBS__CS_LANES; l++) {
-    BI[l] = BI[l + 8] = l < lanes ? ids[(size_t)(c0 + l) * istep] & imask : 0;
+  /* Each lane's element twice, {ip, ip}, for lanes 0-3 (IP0) and 4-7 (IP1), 0 past the
+   * block's lanes, by masked loads, and twice over in BP for the rotations. (Stored lane by
+   * lane and read back by a 16-byte load, the load waited for the stores to reach the
+   * cache: a forwarding stall, 5% of the kernel's samples at 3D N = 1e6.) */
+  __m256i IP0, IP1;
+  if (form == NBS__CS_IDX) {
+    const __m128i n4 = _mm_set1_epi32(lanes);
+    const __m128i m0 = _mm_cmpgt_epi32(n4, _mm_set_epi32(3, 2, 1, 0));
+    const __m128i m1 = _mm_cmpgt_epi32(n4, _mm_set_epi32(7, 6, 5, 4));
+    const __m128i i0 = _mm_maskload_epi32(ids + c0, m0), i1 = _mm_maskload_epi32(ids + c0 + 4, m1);
+    IP0 = _mm256_shuffle_epi32(_mm256_cvtepu32_epi64(i0), 0xA0);
+    IP1 = _mm256_shuffle_epi32(_mm256_cvtepu32_epi64(i1), 0xA0);
+  } else {
+    /* the packed words, whose low halves hold the elements */
+    const long long *w = (const long long *)(const void *)(ids + (size_t)c0 * 2);
+    IP0 = _mm256_shuffle_epi32(_mm256_maskload_epi64(w, ma), 0xA0);
+    IP1 = _mm256_shuffle_epi32(_mm256_maskload_epi64(w + 4, mb), 0xA0);
   }
-  /* each lane's element twice, {ip, ip}, for lanes 0-3 and 4-7 */
-  const __m256i IPa = nbs__twice4(BI), IPb = nbs__twice4(BI + 4);
+  if (!whole) {
+    IP0 = _mm256_and_si256(IP0, _mm256_set1_epi32(imask));
+    IP1 = _mm256_and_si256(IP1, _mm256_set1_epi32(imask));
+  }
+  long long BP[16];
+  _mm256_storeu_si256((__m256i *)(void *)BP, IP0);
+  _mm256_storeu_si256((__m256i *)(void *)(BP + 4), IP1);
+  _mm256_storeu_si256((__m256i *)(void *)(BP + 8), IP0);
+  _mm256_storeu_si256((__m256i *)(void *)(BP + 12), IP1);
   const __m256d LIM = _mm256_set1_pd(c->d2);
   nbs_pair *o = out; /* where the next pairs go */
-  /* the lanes of half h (a: 0-3, b: 4-7) against partners QX.. IQ, keeping the lanes of the
-   * bits kh */
-#define NBS__CS_HALF256(h, QX, QY, QZ, QR, IQ, kh)                                            \
+  /* the pairs of lanes 0-3 (IP = IP0) or 4-7 (IP1) with partners IQ, of the lanes of the
+   * bits kh, packed by a permutation and stored at o */
+#define NBS__CS_PAIRS256(IP, IQ, kh)                                                          \
   do {                                                                                        \
-    const __m256d dx = _mm256_sub_pd(X##h, QX), dy = _mm256_sub_pd(Y##h, QY);                 \
-    __m256d d = _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy));                  \
-    if (dim == 3) {                                                                           \
-      const __m256d dz = _mm256_sub_pd(Z##h, QZ);                                             \
-      d = _mm256_add_pd(d, _mm256_mul_pd(dz, dz));                                            \
-    }                                                                                         \
-    __m256d lim = LIM;                                                                        \
-    if (radii) {                                                                              \
-      const __m256d rr = _mm256_add_pd(R##h, QR);                                             \
-      lim = _mm256_mul_pd(rr, rr);                                                            \
-    }                                                                                         \
-    const unsigned hit =                                                                      \
-        contacts ? (unsigned)_mm256_movemask_pd(_mm256_cmp_pd(d, lim, _CMP_LE_OQ)) & (kh)     \
-                 : (kh);                                                                      \
-    const __m256i pr = _mm256_blend_epi32(_mm256_min_epi32(IP##h, IQ),                        \
-                                          _mm256_max_epi32(IP##h, IQ), 0xAA);                 \
-    const __m256i pk = _mm256_loadu_si256((const __m256i *)(const void *)nbs__pack4[hit]); \
+    const unsigned hit = (kh);                                                                \
+    const __m256i pr =                                                                        \
+        _mm256_blend_epi32(_mm256_min_epi32(IP, IQ), _mm256_max_epi32(IP, IQ), 0xAA);         \
+    const __m256i pk = _mm256_loadu_si256((const __m256i *)(const void *)nbs__pack4[hit]);    \
     _mm256_storeu_si256((__m256i *)(void *)o, _mm256_permutevar8x32_epi32(pr, pk));           \
     o += (unsigned)__builtin_popcount(hit);                                                   \
   } while (0)
-  /* the ranges before the block meet every lane (the last range ends with the block, see
-   * nbs__cs_offer) */
+  /* The steps over the ranges (before the block, they meet every lane; the last range ends
+   * with the block, see nbs__cs_offer) note only each q and its 8 lanes' results, a note
+   * kept where one lane or more hit, and the notes become pairs after the ranges, or when
+   * NBS__CS_NOTES of them wait: a step without a hit, most of them in contact mode (about
+   * 70% in 3D at volume fraction 0.5), then costs no pairs' output, which took half of a
+   * step's instructions where the pairs were built at every step. The notes' pairs are the
+   * ones the steps found, in the same order (q by q, each q's lanes 0-7). Zen 3 (AVX2
+   * only), interleaved with 8acdd9d, min of 3-4 rounds, search in ns per element, the same
+   * bytes: 3D N = 1e6 34.0 -> 29.9 (the detection 55.5 -> 52.5), time steps of 1e-3 34.0
+   * -> 30.2, sparse 34.9 -> 31.2, clustered 34.6 -> 30.3, huge 11.0 -> 10.9, 1e4 with four
+   * decoys 33.6 -> 29.7. A block meets about 35 q in 3D, 8 of them with a hit. In 2D it
+   * meets 9, 3.2 with a hit, and the notes were slower (11.6 -> 12.5): the per-block cost
+   * of the notes' loop outweighs the steps' savings, so 2D builds the pairs at every step.
+   * (The count of notes as a 64-bit index, saving a sign extension a step: no faster.) */
+  enum { NBS__CS_NOTES = 256 };
+  int32_t nq[NBS__CS_NOTES];
+  uint8_t nm[NBS__CS_NOTES];
+  int32_t nn = 0;
+#define NBS__CS_FLUSH256()                                                                    \
+  do {                                                                                        \
+    for (int32_t k = 0; k < nn; k++) {                                                        \
+      const size_t s = (size_t)nq[k] * istep;                                                 \
+      const __m256i iq = _mm256_set1_epi32(whole ? ids[s] : ids[s] & imask);                  \
+      const unsigned km = nm[k] & im;                                                         \
+      NBS__CS_PAIRS256(IP0, iq, km & 0xF);                                                    \
+      NBS__CS_PAIRS256(IP1, iq, km >> 4);                                                     \
+    }                                                                                         \
+    nn = 0;                                                                                   \
+  } while (0)
+  /* the block's lanes 0-3 and 4-7 of each coordinate, X0 and X1 .. */
+#define NBS__CS_LANES256()                                                                    \
+  const __m256d X0 = _mm256_loadu_pd(BX), X1 = _mm256_loadu_pd(BX + 4);                      \
+  const __m256d Y0 = _mm256_loadu_pd(BY), Y1 = _mm256_loadu_pd(BY + 4);                      \
+  const __m256d Z0 = dim == 3 ? _mm256_loadu_pd(BZ) : X0;                                     \
+  const __m256d Z1 = dim == 3 ? _mm256_loadu_pd(BZ + 4) : X1;                                 \
+  const __m256d R0 = radii ? _mm256_loadu_pd(BR) : X0;                                        \
+  const __m256d R1 = radii ? _mm256_loadu_pd(BR + 4) : X1
   const int last = rg->count - 1;
-  for (int r = 0; r < rg->count; r++) {
-    const int32_t q1 = r == last && rg->q1[r] > c0 ? c0 : rg->q1[r];
-    for (int32_t q = rg->q0[r]; q < q1; q++) {
-      const __m256d qx = _mm256_set1_pd(X[q]), qy = _mm256_set1_pd(Y[q]);
-      const __m256d qz = dim == 3 ? _mm256_set1_pd(Z[q]) : qx;
-      const __m256d qr = radii ? _mm256_set1_pd(R[q]) : qx;
-      const __m256i iq = _mm256_set1_epi32(whole ? ids[(size_t)q * istep]
-                                                 : ids[(size_t)q * istep] & imask);
-      NBS__CS_HALF256(a, qx, qy, qz, qr, iq, ima);
-      if (imb) NBS__CS_HALF256(b, qx, qy, qz, qr, iq, imb);
+  if (dim == 2) {
+    NBS__CS_LANES256();
+    (void)Z0, (void)Z1;
+    for (int r = 0; r < rg->count; r++) {
+      const int32_t q1 = r == last && rg->q1[r] > c0 ? c0 : rg->q1[r];
+      for (int32_t q = rg->q0[r]; q < q1; q++) {
+        const __m256d qx = _mm256_set1_pd(X[q]), qy = _mm256_set1_pd(Y[q]);
+        const __m256d qr = radii ? _mm256_set1_pd(R[q]) : qx;
+        const __m256i iq = _mm256_set1_epi32(whole ? ids[(size_t)q * istep]
+                                                   : ids[(size_t)q * istep] & imask);
+        NBS__CS_PAIRS256(IP0, iq,
+                         contacts ? (unsigned)_mm256_movemask_pd(nbs__cs_near256(
+                                        dim, radii, LIM, X0, Y0, X0, R0, qx, qy, qx, qr)) &
+                                        ima
+                                  : ima);
+        if (imb) {
+          NBS__CS_PAIRS256(IP1, iq,
+                           contacts ? (unsigned)_mm256_movemask_pd(nbs__cs_near256(
+                                          dim, radii, LIM, X1, Y1, X1, R1, qx, qy, qx, qr)) &
+                                          imb
+                                    : imb);
+        }
+      }
     }
   }
-  /* the block's own pairs, by rotation, as in the AVX-512 kernel */
-  const int own = rg->q1[last] > c0 ? NBS__CS_LANES / 2 : 0;
-  for (int k = 1; k <= own; k++) {
-    unsigned vm = im & (im >> k | im << (NBS__CS_LANES - k));
-    if (k == NBS__CS_LANES / 2) vm &= 0x0F;
-    if (!vm) break;
-    const __m256d qxa = _mm256_loadu_pd(BX + k), qxb = _mm256_loadu_pd(BX + k + 4);
-    const __m256d qya = _mm256_loadu_pd(BY + k), qyb = _mm256_loadu_pd(BY + k + 4);
-    const __m256d qza = dim == 3 ? _mm256_loadu_pd(BZ + k) : qxa;
-    const __m256d qzb = dim == 3 ? _mm256_loadu_pd(BZ + k + 4) : qxb;
-    const __m256d qra = radii ? _mm256_loadu_pd(BR + k) : qxa;
-    const __m256d qrb = radii ? _mm256_loadu_pd(BR + k + 4) : qxb;
-    const __m256i iqa = nbs__twice4(BI + k), iqb = nbs__twice4(BI + k + 4);
-    NBS__CS_HALF256(a, qxa, qya, qza, qra, iqa, vm & 0xF);
-    if (vm >> 4) NBS__CS_HALF256(b, qxb, qyb, qzb, qrb, iqb, vm >> 4);
+  for (int r = 0; dim == 3 && r < rg->count; r++) {
+    const int32_t q1 = r == last && rg->q1[r] > c0 ? c0 : rg->q1[r];
+    for (int32_t q = rg->q0[r]; q < q1;) {
+      if (nn == NBS__CS_NOTES) NBS__CS_FLUSH256();
+      const int32_t qe = q1 - q < NBS__CS_NOTES - nn ? q1 : q + (NBS__CS_NOTES - nn);
+      for (; q < qe; q++) {
+        const __m256d qx = _mm256_set1_pd(X[q]), qy = _mm256_set1_pd(Y[q]);
+        const __m256d qz = dim == 3 ? _mm256_set1_pd(Z[q]) : qx;
+        const __m256d qr = radii ? _mm256_set1_pd(R[q]) : qx;
+        unsigned hm = 0xFF;
+        if (contacts) {
+          const __m256d ca = nbs__cs_near256(dim, radii, LIM, Xa, Ya, Za, Ra, qx, qy, qz, qr);
+          const __m256d cb = nbs__cs_near256(dim, radii, LIM, Xb, Yb, Zb, Rb, qx, qy, qz, qr);
+          hm = (unsigned)_mm256_movemask_ps(_mm256_castsi256_ps(
+              _mm256_packs_epi32(_mm256_castpd_si256(ca), _mm256_castpd_si256(cb))));
+        }
+        nq[nn] = q;
+        nm[nn] = (uint8_t)hm;
+        nn += hm != 0;
+      }
+    }
   }
-#undef NBS__CS_HALF256
+  NBS__CS_FLUSH256();
+#undef NBS__CS_FLUSH256
+  /* the block's own pairs, by rotation, as in the AVX-512 kernel: lanes 0-3 and 4-7
+   * against lanes k.. k + 3 and k + 4.. k + 7 */
+  const int own = rg->q1[last] > c0 ? NBS__CS_LANES / 2 : 0;
+  if (own) {
+    NBS__CS_LANES256();
+    for (int k = 1; k <= own; k++) {
+      unsigned vm = im & (im >> k | im << (NBS__CS_LANES - k));
+      if (k == NBS__CS_LANES / 2) vm &= 0x0F;
+      if (!vm) break;
+      const __m256d qxa = _mm256_loadu_pd(BX + k), qxb = _mm256_loadu_pd(BX + k + 4);
+      const __m256d qya = _mm256_loadu_pd(BY + k), qyb = _mm256_loadu_pd(BY + k + 4);
+      const __m256d qza = dim == 3 ? _mm256_loadu_pd(BZ + k) : qxa;
+      const __m256d qzb = dim == 3 ? _mm256_loadu_pd(BZ + k + 4) : qxb;
+      const __m256d qra = radii ? _mm256_loadu_pd(BR + k) : qxa;
+      const __m256d qrb = radii ? _mm256_loadu_pd(BR + k + 4) : qxb;
+      const __m256i iqa = _mm256_loadu_si256((const __m256i *)(const void *)(BP + k));
+      const __m256i iqb = _mm256_loadu_si256((const __m256i *)(const void *)(BP + k + 4));
+      unsigned ha = vm & 0xF, hb = vm >> 4;
+      if (contacts) {
+        ha &= (unsigned)_mm256_movemask_pd(
+            nbs__cs_near256(dim, radii, LIM, X0, Y0, Z0, R0, qxa, qya, qza, qra));
+        hb &= (unsigned)_mm256_movemask_pd(
+            nbs__cs_near256(dim, radii, LIM, X1, Y1, Z1, R1, qxb, qyb, qzb, qrb));
+      }
+      NBS__CS_PAIRS256(IP0, iqa, ha);
+      if (vm >> 4) NBS__CS_PAIRS256(IP1, iqb, hb);
+    }
+  }
+#undef NBS__CS_PAIRS256
+#undef NBS__CS_LANES256
   return (size_t)(o - out);
 }
 
