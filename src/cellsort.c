@@ -1435,7 +1435,13 @@ nbs__cs_block256_body(const nbs__cs *c, int dim, bool radii, bool contacts, int 
    * decoys 33.6 -> 29.7. A block meets about 35 q in 3D, 8 of them with a hit. In 2D it
    * meets 9, 3.2 with a hit, and the notes were slower (11.6 -> 12.5): the per-block cost
    * of the notes' loop outweighs the steps' savings, so 2D builds the pairs at every step.
-   * (The count of notes as a 64-bit index, saving a sign extension a step: no faster.) */
+   * Tried and left out (min of 4-6, search): the count of notes as a 64-bit index, saving
+   * a sign extension a step: no faster; the ranges' places listed by the AVX2 sweep and
+   * the steps one loop over them, as for AVX-512: 28.7 -> 28.2 at 1e6 and 29.8 -> 28.8 at
+   * 1e4, but the huge domain 11.0 -> 11.6 and time steps 28.7 -> 28.9; each window's next
+   * places asked for (prefetched) by the sweep: slower (28.9 -> 30.0). With the notes
+   * never turned into pairs (a wrong output, to measure them) the search took 24.0
+   * against 28.8: the notes' loop and the pairs' stores, which go to memory at N = 1e6. */
   enum { NBS__CS_NOTES = 256 };
   int32_t nq[NBS__CS_NOTES];
   uint8_t nm[NBS__CS_NOTES];
