@@ -1439,7 +1439,10 @@ nbs__cs_block256_body(const nbs__cs *c, int dim, bool radii, bool contacts, int 
    * a sign extension a step: no faster; the ranges' places listed by the AVX2 sweep and
    * the steps one loop over them, as for AVX-512: 28.7 -> 28.2 at 1e6 and 29.8 -> 28.8 at
    * 1e4, but the huge domain 11.0 -> 11.6 and time steps 28.7 -> 28.9; each window's next
-   * places asked for (prefetched) by the sweep: slower (28.9 -> 30.0). With the notes
+   * places asked for (prefetched) by the sweep: slower (28.9 -> 30.0); each note's pairs
+   * by one 8-lane compress (a table of 256 rows of lane indices, one vpermd of the 8
+   * elements, min and max, two unpacks and two stores) instead of the two halves': 28.46
+   * against 28.48, no faster. With the notes
    * never turned into pairs (a wrong output, to measure them) the search took 24.0
    * against 28.8: the notes' loop and the pairs' stores, which go to memory at N = 1e6. */
   enum { NBS__CS_NOTES = 256 };
