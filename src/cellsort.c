@@ -1424,8 +1424,9 @@ nbs__cs_block256_body(const nbs__cs *c, int dim, bool radii, bool contacts, int 
   } while (0)
   /* The steps over the ranges (before the block, they meet every lane; the last range ends
    * with the block, see nbs__cs_offer) note only each q and its 8 lanes' results, a note
-   * kept where one lane or more hit, and the notes become pairs after the ranges, or when
-   * NBS__CS_NOTES of them wait: a step without a hit, most of them in contact mode (about
+   * kept where one lane or more hit, and the notes become pairs after the ranges (at most
+   * NBS__CS_SLICE of them: nbs__cs_offer gives a call no more places): a step without a
+   * hit, most of them in contact mode (about
    * 70% in 3D at volume fraction 0.5), then costs no pairs' output, which took half of a
    * step's instructions where the pairs were built at every step. The notes' pairs are the
    * ones the steps found, in the same order (q by q, each q's lanes 0-7). Zen 3 (AVX2
@@ -1444,24 +1445,9 @@ nbs__cs_block256_body(const nbs__cs *c, int dim, bool radii, bool contacts, int 
    * elements, min and max, two unpacks and two stores) instead of the two halves': 28.46
    * against 28.48, no faster; nor in 2D at every step (the two halves' comparisons packed
    * into one mask, its pairs by that compress): 1e6 10.59 against 10.57, 1e4 9.71 -> 9.94.
-   * With the notes
-   * never turned into pairs (a wrong output, to measure them) the search took 24.0
-   * against 28.8: the notes' loop and the pairs' stores, which go to memory at N = 1e6. */
-  enum { NBS__CS_NOTES = 256 };
-  int32_t nq[NBS__CS_NOTES];
-  uint8_t nm[NBS__CS_NOTES];
-  int32_t nn = 0;
-#define NBS__CS_FLUSH256()                                                                    \
-  do {                                                                                        \
-    for (int32_t k = 0; k < nn; k++) {                                                        \
-      const size_t s = (size_t)nq[k] * istep;                                                 \
-      const __m256i iq = _mm256_set1_epi32(whole ? ids[s] : ids[s] & imask);                  \
-      const unsigned km = nm[k] & im;                                                         \
-      NBS__CS_PAIRS256(IP0, iq, km & 0xF);                                                    \
-      NBS__CS_PAIRS256(IP1, iq, km >> 4);                                                     \
-    }                                                                                         \
-    nn = 0;                                                                                   \
-  } while (0)
+   * With the notes never turned into pairs (a wrong output, to measure them) the search
+   * took 24.0 against 28.8: the notes' loop and the pairs' stores, which go to memory at
+   * N = 1e6. */
   /* the block's lanes 0-3 and 4-7 of each coordinate, X0 and X1 .. */
 #define NBS__CS_LANES256()                                                                    \
   const __m256d X0 = _mm256_loadu_pd(BX), X1 = _mm256_loadu_pd(BX + 4);                      \
@@ -1495,15 +1481,15 @@ nbs__cs_block256_body(const nbs__cs *c, int dim, bool radii, bool contacts, int 
         }
       }
     }
-  }
-  for (int r = 0; dim == 3 && r < rg->count; r++) {
-    const int32_t q1 = r == last && rg->q1[r] > c0 ? c0 : rg->q1[r];
-    for (int32_t q = rg->q0[r]; q < q1;) {
-      if (nn == NBS__CS_NOTES) NBS__CS_FLUSH256();
-      const int32_t qe = q1 - q < NBS__CS_NOTES - nn ? q1 : q + (NBS__CS_NOTES - nn);
-      for (; q < qe; q++) {
+  } else {
+    int32_t nq[NBS__CS_SLICE];
+    uint8_t nm[NBS__CS_SLICE];
+    int32_t nn = 0;
+    for (int r = 0; r < rg->count; r++) {
+      const int32_t q1 = r == last && rg->q1[r] > c0 ? c0 : rg->q1[r];
+      for (int32_t q = rg->q0[r]; q < q1; q++) {
         const __m256d qx = _mm256_set1_pd(X[q]), qy = _mm256_set1_pd(Y[q]);
-        const __m256d qz = dim == 3 ? _mm256_set1_pd(Z[q]) : qx;
+        const __m256d qz = _mm256_set1_pd(Z[q]);
         const __m256d qr = radii ? _mm256_set1_pd(R[q]) : qx;
         unsigned hm = 0xFF;
         if (contacts) {
@@ -1517,9 +1503,14 @@ nbs__cs_block256_body(const nbs__cs *c, int dim, bool radii, bool contacts, int 
         nn += hm != 0;
       }
     }
+    for (int32_t k = 0; k < nn; k++) {
+      const size_t at = (size_t)nq[k] * istep;
+      const __m256i iq = _mm256_set1_epi32(whole ? ids[at] : ids[at] & imask);
+      const unsigned km = nm[k] & im;
+      NBS__CS_PAIRS256(IP0, iq, km & 0xF);
+      NBS__CS_PAIRS256(IP1, iq, km >> 4);
+    }
   }
-  NBS__CS_FLUSH256();
-#undef NBS__CS_FLUSH256
   /* the block's own pairs, by rotation, as in the AVX-512 kernel: lanes 0-3 and 4-7
    * against lanes k.. k + 3 and k + 4.. k + 7 */
   const int own = rg->q1[last] > c0 ? NBS__CS_LANES / 2 : 0;
