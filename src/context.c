@@ -198,7 +198,14 @@ int nbs__threads(const nbs_context *ctx, int64_t useful) {
  * huge pages are given on request only): 3D cellsort, N = 1e6, 30.3 -> 29.6 ns per element,
  * N = 1e7 42.3 -> 58.5 (interleaved, min of 5). Again on 585a76a (Zen 5; the kernel then gave
  * the block's huge pages, /proc/vmstat's thp_fault_alloc): auto, N = 1e6, medians of 12
- * interleaved processes 25.10 -> 25.03, N = 1e7 25.66 -> 25.51, within the noise. */
+ * interleaved processes 25.10 -> 25.03, N = 1e7 25.66 -> 25.51, within the noise. And on
+ * 72fa429 (Zen 3, AVX2 only; every default allocation of 4 MiB or more advised, the work
+ * block, the pair buffer and the threads' lists; the same binary with the advice turned off
+ * by an environment variable, 10 interleaved rounds, --fresh): auto 3D N = 1e6 min 49.68 ->
+ * 49.33, medians 51.6 -> 50.6, preparation 18.7 -> 18.3; 2D 29.4 / 29.7; time steps 40.2 /
+ * 40.4; N = 1e7 53.1 -> 57.7 (min of 3). The caller's coordinates on huge pages, in the
+ * same run: 3D 49.6 -> 46.7 (preparation 18.9 -> 16.3: the gather's random reads, which
+ * miss the TLB), 2D 28.3 -> 27.5 (README, "The C API"). */
 bool nbs__replace(nbs_context *ctx, void **buf, size_t *size, size_t bytes) {
   void *p = nbs__alloc(ctx, bytes);
   if (!p) return false;
