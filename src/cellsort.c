@@ -247,6 +247,10 @@
  * distance, bounded the random reads (see nbs__cs_prefetch). */
 #define NBS__CS_AHEAD 256
 #define NBS__CS_NEAR 32
+/* (On Zen 3, 72fa429, 3D N = 1e6, NBS_PARTITION=never, interleaved, min of 4, preparation
+ * in ns per element: 256 and 32 19.42, 512 and 32 19.86, 1024 and 64 20.31, 256 and 64
+ * 19.77: within noise. With the caller's coordinates on huge pages the same gather takes
+ * about 2.6 less: its reads also miss the TLB; see the README, "The C API".) */
 /* The input's size (bytes of coordinates and radii) above which the gather and the warm
  * pass prefetch at all. Below it the input is in the caches by the time it is read, and
  * the prefetches, with the reads of the words ahead that name their elements, only cost
@@ -1447,7 +1451,27 @@ nbs__cs_block256_body(const nbs__cs *c, int dim, bool radii, bool contacts, int 
    * into one mask, its pairs by that compress): 1e6 10.59 against 10.57, 1e4 9.71 -> 9.94.
    * With the notes never turned into pairs (a wrong output, to measure them) the search
    * took 24.0 against 28.8: the notes' loop and the pairs' stores, which go to memory at
-   * N = 1e6. */
+   * N = 1e6.
+   * What the tests themselves cost (72fa429, Zen 3, wrong outputs, to measure them; search
+   * in ns per element, min of 4): with every step's test left out, 3D 28.4 -> 10.9 at N =
+   * 1e6 and 27.7 -> 12.5 at 1e4 (whose search costs as much per element: nothing here
+   * waits on memory); with half b's tests left out, 3D 27.7 -> 24.5, 2D 10.5 -> 8.8 (1e4
+   * 15.2 -> 11.8). A q seldom reaches both halves (a block spans about 8 diameters in x in
+   * 3D, 12 in 2D, a q one either side of it), so testing only the halves in reach could
+   * save up to those figures; but which q reach which half is a count of each range's keys
+   * per half (the windows' own edges, by lanes 3 and 4), and the q of each then a loop or a
+   * list of their own, whose order must still come out q by q: by estimate that costs
+   * about what it saves, and it was not built. Tried and left out (same figures): the
+   * subtractions of dz (or dy and dz) as fused multiply-adds by 1.0, the same roundings,
+   * to move them from the two adding pipes to the two multiplying ones: 1e4 27.68 ->
+   * 28.17, 1e6 28.15 -> 28.44, no faster (nor is the bound what the pipes give: 20
+   * vector operations a step, about 8.5 cycles per step where the pipes need 5); the
+   * rotations from k = 2 on skipped, with every one after, where no two lanes k apart lie
+   * within `fine` sub-cells (exact, the windows' own criterion): 3D 27.7 -> 28.9, 2D 10.5 ->
+   * 11.8 (the lanes' sub-cells stored, then read at offset k across two of the stores,
+   * which store forwarding cannot serve), and with rotations 3 and 4 left out whatever the
+   * lanes (a wrong output; the check kept at k = 2) 3D 27.8 -> 27.0 only; the ranges of long rows listed by the AVX2 sweep, short rows not (the list
+   * had cost the huge domain, above): 27.7 -> 28.8. */
   /* the block's lanes 0-3 and 4-7 of each coordinate, X0 and X1 .. */
 #define NBS__CS_LANES256()                                                                    \
   const __m256d X0 = _mm256_loadu_pd(BX), X1 = _mm256_loadu_pd(BX + 4);                      \
