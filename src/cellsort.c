@@ -1474,7 +1474,12 @@ nbs__cs_block256_body(const nbs__cs *c, int dim, bool radii, bool contacts, int 
    * within `fine` sub-cells (exact, the windows' own criterion): 3D 27.7 -> 28.9, 2D 10.5 ->
    * 11.8 (the lanes' sub-cells stored, then read at offset k across two of the stores,
    * which store forwarding cannot serve), and with rotations 3 and 4 left out whatever the
-   * lanes (a wrong output; the check kept at k = 2) 3D 27.8 -> 27.0 only; the ranges of long rows listed by the AVX2 sweep, short rows not (the list
+   * lanes (a wrong output; the check kept at k = 2) 3D 27.8 -> 27.0 only; with the
+   * sub-cells' smallest gaps 2, 3 and 4 lanes apart computed from the keys in scalar code
+   * (no store forwarding) and the loop run to the last rotation in reach: 3D 27.8 -> 29.8,
+   * 2D 10.4 -> 12.6 (the loop's count, 2 to 4, now mispredicted; with every rotation left
+   * out, a wrong output, 3D 27.9 -> 25.8 and 2D 10.4 -> 8.8: what the rotations cost); the
+   * ranges of long rows listed by the AVX2 sweep, short rows not (the list
    * had cost the huge domain, above): 27.7 -> 28.8. */
   /* the block's lanes 0-3 and 4-7 of each coordinate, X0 and X1 .. */
 #define NBS__CS_LANES256()                                                                    \
