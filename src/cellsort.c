@@ -3204,7 +3204,8 @@ static size_t nbs__cs_input_bytes(const nbs__cs *c) {
  *    plain store that misses about 12 ns per element in a scatter, 75.3-78.5 against
  *    62.3-66.0 (interleaved, four rounds; the same bytes). So the context times its first
  *    detections from scratch, NBS__CS_TUNE_TRIES of each way, the sort and the gather first
- *    (each from the detection's start to its search, the input's pass included: the
+ *    (not the first in a work block just allocated, whose pages it faults in: nbs__detect;
+ *    each from the detection's start to its search, the input's pass included: the
  *    partition has input.c's pass, the other way nbs__cellsort_fresh's), and takes the
  *    faster way from then on, for inputs of the class it measured (the dimension, the
  *    threads and the power of two of the bytes; another class measures again). A try costs

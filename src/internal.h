@@ -124,6 +124,10 @@ struct nbs_context {
   size_t work_size;
   int work_kind;
   int64_t work_cap[4];
+  /* The work block was allocated (nbs__work_reserve) and no cellsort detection has run in it
+   * since: the next one's time is the first touch of its pages, and is no try of cs_ways or
+   * cs_steps (nbs__detect). */
+  bool work_new;
   /* NBS's layer block (3D): a copy of the elements of the central layer and of the layer
    * below it, in their own allocation because its size is known only once a detection has
    * counted the layers (munjiza_nbs.c). Nothing in it lives from one detection to the next. */
