@@ -533,18 +533,9 @@ static nbs_status nbs__detect(nbs_context *ctx, const nbs_input *in, const nbs_d
    * writes its arrays, and takes about twice as long to its search as the next ones (3D, N =
    * 1e6, Zen 3: 50-71 against 27-38 ns per element). Counted, it was the first try of the sort
    * and the gather, which the context tries first: that way had one real try against the
-   * partition's two. The try not counted is made again at the next detection. (Side by side
-   * with the build before, two runs of 10 and 12 interleaved processes of nbs_bench --fresh
-   * --repeats 10 each, in noisy spells of this guest, the processes that took the partition: 3D
-   * 7 -> 5 and 4 -> 4, 2D 8 -> 7 and 9 -> 6; in a quieter one, 8 each, 3D 2 -> 0 and 2D 5 -> 3,
-   * not side by side. Those that took it ran slower: 3D 56.9-70.9 against 50.6-68.6, 2D
-   * 31.4-39.9 against 28.6-40.1. Two tries each are still few against this noise: more would
-   * cost the slower way's difference once more per try. In a quiet spell the partition is the
-   * slower way, 3D 54.6-71.4 against 49.7-52.3 ns per element, 2D 29.9-39.2 against 27.4-32.8,
-   * NBS_PARTITION=always against never, interleaved, five rounds; in a noisy one each
-   * detection's time to the search came out about even (a probe of nbs_stats), and forced runs
-   * later had the partition's preparation 3 ns slower again. So which way wins moves with the
-   * guest's spells, and the context keeps the way of the spell it measured in.) */
+   * partition's two, and contexts took the partition where it was the slower way (bench/README,
+   * "An eighth machine", 2026-12-03 evening). The try not counted is made at the next
+   * detection. */
   const bool first_use = ctx->work_new;
   if (run.ran == NBS_CELLSORT) ctx->work_new = false;
   if ((run.cs_try || run.cs_step_try) && run.t_search > 0.0 && !first_use) {

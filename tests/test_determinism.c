@@ -743,8 +743,9 @@ static void tuned_detect(nbs_context *ctx, const scene *s, bool fresh, pair_list
  * default the context times its first such detections, the sort and the gather, then the
  * partition, twice each, alternating, and takes the faster way from then on; a detection
  * that starts from the last order is not a try, nor is the first in a work block just
- * allocated (the context's first here, and the 2D scene's, which needs a larger block); an input of another class (2D, or 3D of
- * another power of two of bytes) is measured again, and one below 8 MiB never partitions;
+ * allocated (the context's first here, and the 2D scene's, which needs a larger block); an
+ * input of another class (2D, or 3D of another power of two of bytes) is measured again, and
+ * one below 8 MiB never partitions;
  * NBS_PARTITION=never and =always keep to their way and measure nothing. A sheet (most
  * elements in one layer, under one top digit) that the partition cannot take counts as its
  * tries, and is never partitioned after. Every detection gives the bytes of the sort and the
@@ -811,7 +812,8 @@ static void test_tuned_way(void) {
         } else if (sc == 2) {
           CHECK_MSG(took[k] == 1, "%s: detection %d partitioned", names[sc], k);
         } else if (!fresh || first_use || tries == 4) {
-          /* (the class was measured again from this scene's first detection on) */
+          /* no try: from the last order, in a new block, or after the four (tries counts
+           * this scene's class alone, which its first detection measures afresh) */
           CHECK_MSG(now == tries, "%s, %d threads, detection %d: %d tries, %d before",
                     names[sc], threads, k, now, tries);
           if (fresh && first_use) {
