@@ -5249,7 +5249,7 @@ static bool nbs__cs_core_part(const nbs__cs *c, const nbs__run *run, const nbs__
   box.buckets = (int)B;
   box.between = between;
   const nbs__cs_dst d = nbs__cs_dst_of(c);
-  const size_t wc = B * (size_t)(1 + d.S) * NBS__CS_LINE * sizeof(uint64_t);
+  const size_t wc = nbs__cs_part_wbytes(B, d.S, false); /* a line per array: nbs__cs_part_put */
   uint32_t top[((size_t)1 << NBS__RADIX_BITS) + 1];
   int32_t out[NBS__THREADS_MAX][3], ofrom[NBS__THREADS_MAX + 1];
   int32_t below = 0, mid = 0, above = 0;
