@@ -4,7 +4,7 @@
  *     and the callback sink, each in the algorithm's own order (not sorted);
  *   - across time steps: cellsort's start from the last detection's cell order gives the
  *     bytes of a detection from scratch, whatever the elements did since;
- *   - across thread counts: cellsort (and auto) with 1, 2, 3, 4, 7 and 8 threads, in order;
+ *   - across thread counts: cellsort (and auto) with 1, 2, 3 and 8 threads, in order;
  *   - across sorts: cellsort's partition (NBS_PARTITION=always) and its sort and gather
  *     (NBS_PARTITION=never), in order, with 1 to 8 threads;
  *   - across kernels: cellsort's AVX-512 kernel (where the processor has it) and its generic
@@ -241,8 +241,11 @@ static void test_repeat_runs(void) {
           continue;
         }
         ASSERT_OK(detect_raw(fresh, &s, algo, (nbs_mode)mode, &again));
-        /* the other context: another scene with each algorithm first, then this one */
+        /* the other context: another scene with each algorithm first, then this one. direct
+         * (no layout of its own, and never the last) only before itself: its O(N^2) on the
+         * larger scene was a third of the test's time under AddressSanitizer */
         for (int b = 0; b < NBS_ALGORITHM_COUNT; b++) {
+          if (b == NBS_DIRECT && algo != NBS_DIRECT) continue;
           if (detect_raw(used, &other, (nbs_algorithm)b, NBS_MODE_CONTACTS, &scratch) == NBS_OK) {
             pair_list_free(&scratch);
           }
@@ -309,7 +312,7 @@ static void test_thread_shape(const int *counts, size_t ncounts, int shape, long
                   dim, what, nbs_algorithm_name(algos[a]), mode, counts[t]);
         CHECK_MSG(same_bytes(&viacb, &ref), "%dD %s %s mode %d, %d threads: the callback "
                   "differs", dim, what, nbs_algorithm_name(algos[a]), mode, counts[t]);
-        free(got.p);
+        pair_list_free(&got);
         pair_list_free(&again);
         pair_list_free(&viacb);
         nbs_context_destroy(ctx);
@@ -321,7 +324,9 @@ static void test_thread_shape(const int *counts, size_t ncounts, int shape, long
 }
 
 static void test_thread_counts(void) {
-  const int counts[] = {1, 2, 3, 4, 7, 8};
+  /* cellsort takes a thread per 20000 elements (nbs__cs_threads), 3 of these scenes': 8 asks
+   * more than it takes (4 and 7 were the same detections as 3 and 8) */
+  const int counts[] = {1, 2, 3, 8};
   for (int steal = 0; steal < 2; steal++) {
     if (steal) ASSERT_TRUE(setenv("NBS_STEAL", "first", 1) == 0);
     long stolen = 0;
@@ -893,10 +898,7 @@ static void det_step(nbs_context *ctx, nbs_context *ref_ctx, const scene *s,
   CHECK_EQ(fs.reused_order, 0);
   size_t count;
   const nbs_pair *p = nbs_pairs(fresh, &count);
-  ref.p = malloc((count ? count : 1) * sizeof *ref.p);
-  if (!ref.p) abort();
-  if (count) memcpy(ref.p, p, count * sizeof *p);
-  ref.count = count;
+  pair_list_copy(&ref, p, count);
   CHECK_MSG(same_bytes(&got, &ref), "%s: %zu pairs, %zu from scratch (reused %d, moved %lld)",
             what, got.count, ref.count, st->reused_order, (long long)st->moved);
   pair_list_free(&got);
@@ -1521,20 +1523,18 @@ static void fp_check(const fp_ctx *f, nbs_context *ctx, const scene *s, nbs_algo
   const bool took = ctx->cs_fresh_words;
   pair_list a = {0}, b = {0};
   if (got == NBS_OK) {
-    const nbs_pair *p = nbs_pairs(ctx, &a.count);
-    a.p = malloc((a.count ? a.count : 1) * sizeof *a.p);
-    if (!a.p) abort();
-    if (a.count) memcpy(a.p, p, a.count * sizeof *p);
+    size_t count;
+    const nbs_pair *p = nbs_pairs(ctx, &count);
+    pair_list_copy(&a, p, count);
   }
   const nbs_status want = nbs_detect(ref, &in, &def);
   CHECK_MSG(!ref->cs_fresh_words, "%s: a new context took guessed keys", what);
   CHECK_MSG(got == want, "%s: %s, a new context %s", what, nbs_status_name(got),
             nbs_status_name(want));
   if (got == want && got == NBS_OK) {
-    const nbs_pair *p = nbs_pairs(ref, &b.count);
-    b.p = malloc((b.count ? b.count : 1) * sizeof *b.p);
-    if (!b.p) abort();
-    if (b.count) memcpy(b.p, p, b.count * sizeof *p);
+    size_t count;
+    const nbs_pair *p = nbs_pairs(ref, &count);
+    pair_list_copy(&b, p, count);
     CHECK_MSG(same_bytes(&a, &b), "%s: %zu pairs, a new context %zu", what, a.count, b.count);
   } else if (got == want) {
     CHECK_MSG(nbs_context_error_element(ctx) == nbs_context_error_element(ref) &&
@@ -1544,8 +1544,8 @@ static void fp_check(const fp_ctx *f, nbs_context *ctx, const scene *s, nbs_algo
               (long long)nbs_context_error_element(ref), nbs_context_error(ref));
   }
   if (words >= 0) CHECK_MSG((int)took == words, "%s: guessed keys %d", what, (int)took);
-  free(a.p);
-  free(b.p);
+  pair_list_free(&a);
+  pair_list_free(&b);
   nbs_context_destroy(ref);
 }
 
@@ -1667,10 +1667,9 @@ static void test_fresh_pass(void) {
             }
             /* the same bytes as a new context */
             pair_list a = {0}, b = {0};
-            const nbs_pair *p = nbs_pairs(ctx, &a.count);
-            a.p = malloc((a.count ? a.count : 1) * sizeof *a.p);
-            if (!a.p) abort();
-            if (a.count) memcpy(a.p, p, a.count * sizeof *p);
+            size_t count;
+            const nbs_pair *p = nbs_pairs(ctx, &count);
+            pair_list_copy(&a, p, count);
             nbs_context *ref;
             fp_create(&f, &ref);
             ASSERT_OK(nbs_detect(ref, which, &step));
@@ -1678,7 +1677,7 @@ static void test_fresh_pass(void) {
             CHECK_MSG(a.count == b.count && (a.count == 0 || memcmp(a.p, p, a.count * sizeof *p) == 0),
                       "%s: %zu pairs, a new context %zu", what, a.count, b.count);
             lists_compared++;
-            free(a.p);
+            pair_list_free(&a);
             nbs_context_destroy(ref);
           }
           scene_free(&t);

@@ -26,6 +26,8 @@ nbs_status detect_callback(nbs_context *ctx, const scene *s, nbs_algorithm algo,
 /* Detects the contacts of s with algo (the default definition otherwise) and fills *st
  * with the detection's statistics. Returns the status. */
 nbs_status detect_stats(nbs_context *ctx, const scene *s, nbs_algorithm algo, nbs_stats *st);
+/* Copies count pairs into a new list (a buffer for pair_list_free). */
+void pair_list_copy(pair_list *out, const nbs_pair *p, size_t count);
 void pair_list_free(pair_list *l);
 bool pair_lists_equal(const pair_list *a, const pair_list *b);
 /* True when every pair of sub is in super (both sorted). */
