@@ -3,13 +3,31 @@
 int test_failures;
 
 int test_main(int argc, char **argv, const test_case *tests, size_t count) {
-  int passed = 0, failed = 0;
-  for (size_t t = 0; t < count; t++) {
-    if (argc > 1) {
-      int wanted = 0;
-      for (int a = 1; a < argc; a++) wanted |= strcmp(argv[a], tests[t].name) == 0;
-      if (!wanted) continue;
+  int passed = 0, failed = 0, named = 0, excluded = 0;
+  for (int a = 1; a < argc; a++) {
+    const char *name = argv[a][0] == '-' ? argv[a] + 1 : argv[a];
+    size_t t = 0;
+    while (t < count && strcmp(name, tests[t].name) != 0) t++;
+    if (t == count) {
+      fprintf(stderr, "%s: no test named %s\n", argv[0], name);
+      return 2;
     }
+    if (argv[a][0] == '-') {
+      excluded++;
+    } else {
+      named++;
+    }
+  }
+  if (named && excluded) {
+    fprintf(stderr, "%s: name the tests to run or those to leave out, not both\n", argv[0]);
+    return 2;
+  }
+  for (size_t t = 0; t < count; t++) {
+    int listed = 0;
+    for (int a = 1; a < argc; a++) {
+      listed |= strcmp(argv[a] + (argv[a][0] == '-'), tests[t].name) == 0;
+    }
+    if (named ? !listed : listed) continue;
     test_failures = 0;
     tests[t].fn();
     if (test_failures) {
