@@ -39,5 +39,9 @@ int test_main(int argc, char **argv, const test_case *tests, size_t count) {
     }
   }
   printf("%d passed, %d failed\n", passed, failed);
+  if (passed + failed == 0) {
+    fprintf(stderr, "%s: no test ran\n", argv[0]);
+    return 2;
+  }
   return failed ? 1 : 0;
 }
