@@ -64,8 +64,8 @@ typedef struct test_case {
 } test_case;
 
 /* Runs the tests named on the command line, or all but those named with a leading '-' (ctest
- * splits a long program into parts that way, the last part taking whatever the others do
- * not name), or all without arguments. A name that is no test's, or no test run, is an
+ * splits a long program into parts that way, one part taking whatever the others do not
+ * name), or all without arguments. A name that is no test's, or no test run, is an
  * error (exit 2). */
 int test_main(int argc, char **argv, const test_case *tests, size_t count);
 
